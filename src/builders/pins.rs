@@ -1,0 +1,178 @@
+//! Choosing particles: by index, by a named region of a grid, or by a box.
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use super::grid::grid_index;
+
+/// A corner of a grid cloth. Rows run along the grid's local +Y (bottom is row 0),
+/// columns along local +X (left is column 0).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum GridCorner {
+    /// Column 0, row 0.
+    BottomLeft,
+    /// Last column, row 0.
+    BottomRight,
+    /// Column 0, last row.
+    TopLeft,
+    /// Last column, last row.
+    TopRight,
+}
+
+/// An edge of a grid cloth (see [`GridCorner`] for the orientation).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum GridEdge {
+    /// Row 0.
+    Bottom,
+    /// The last row.
+    Top,
+    /// Column 0.
+    Left,
+    /// The last column.
+    Right,
+}
+
+/// A set of particles of one cloth.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum PinSelection {
+    /// Particles by number.
+    Indices(Vec<u32>),
+    /// Named corners of a grid.
+    Corners(Vec<GridCorner>),
+    /// A whole edge of a grid.
+    Edge(GridEdge),
+    /// Every particle inside an axis-aligned box, in world coordinates [m].
+    InBox {
+        /// Lower corner [m].
+        min: Vec3,
+        /// Upper corner [m].
+        max: Vec3,
+    },
+}
+
+/// Why a selection selects nothing sensible.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SelectionError {
+    /// An index is not a particle of the cloth.
+    #[error("particle {index} does not exist: the cloth has {count} particles (0 to {last})", last = .count.saturating_sub(1))]
+    OutOfRange {
+        /// The index given.
+        index: u32,
+        /// How many particles there are.
+        count: usize,
+    },
+    /// A named corner or edge on a cloth that is not a grid.
+    #[error("corners and edges are named on grid cloths only; use Indices or InBox for a mesh")]
+    NotAGrid,
+    /// A box with no particle inside.
+    #[error("the box from {min} to {max} contains no particle")]
+    EmptyBox {
+        /// Lower corner.
+        min: Vec3,
+        /// Upper corner.
+        max: Vec3,
+    },
+}
+
+impl PinSelection {
+    /// The particles selected, sorted and unique, among `positions` of a cloth that is a
+    /// grid of `grid = (columns, rows)` if it is one.
+    pub fn resolve(
+        &self,
+        positions: &[Vec3],
+        grid: Option<(u32, u32)>,
+    ) -> Result<Vec<u32>, SelectionError> {
+        let count = positions.len();
+        let mut chosen = match self {
+            PinSelection::Indices(indices) => {
+                if let Some(&index) = indices.iter().find(|&&i| i as usize >= count) {
+                    return Err(SelectionError::OutOfRange { index, count });
+                }
+                indices.clone()
+            }
+            PinSelection::Corners(corners) => {
+                let (columns, rows) = grid.ok_or(SelectionError::NotAGrid)?;
+                corners
+                    .iter()
+                    .map(|corner| match corner {
+                        GridCorner::BottomLeft => grid_index(columns, 0, 0),
+                        GridCorner::BottomRight => grid_index(columns, columns - 1, 0),
+                        GridCorner::TopLeft => grid_index(columns, 0, rows - 1),
+                        GridCorner::TopRight => grid_index(columns, columns - 1, rows - 1),
+                    })
+                    .collect()
+            }
+            PinSelection::Edge(edge) => {
+                let (columns, rows) = grid.ok_or(SelectionError::NotAGrid)?;
+                match edge {
+                    GridEdge::Bottom => (0..columns).map(|c| grid_index(columns, c, 0)).collect(),
+                    GridEdge::Top => (0..columns)
+                        .map(|c| grid_index(columns, c, rows - 1))
+                        .collect(),
+                    GridEdge::Left => (0..rows).map(|r| grid_index(columns, 0, r)).collect(),
+                    GridEdge::Right => (0..rows)
+                        .map(|r| grid_index(columns, columns - 1, r))
+                        .collect(),
+                }
+            }
+            PinSelection::InBox { min, max } => {
+                let inside: Vec<u32> = positions
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, p)| p.cmpge(*min).all() && p.cmple(*max).all())
+                    .map(|(i, _)| i as u32)
+                    .collect();
+                if inside.is_empty() {
+                    return Err(SelectionError::EmptyBox {
+                        min: *min,
+                        max: *max,
+                    });
+                }
+                inside
+            }
+        };
+        chosen.sort_unstable();
+        chosen.dedup();
+        Ok(chosen)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn named_regions_of_a_three_by_two_grid() {
+        let positions = vec![Vec3::ZERO; 6];
+        let grid = Some((3, 2));
+        let resolve = |s: PinSelection| s.resolve(&positions, grid).expect("valid");
+        assert_eq!(
+            resolve(PinSelection::Corners(vec![
+                GridCorner::TopRight,
+                GridCorner::BottomLeft
+            ])),
+            vec![0, 5]
+        );
+        assert_eq!(resolve(PinSelection::Edge(GridEdge::Top)), vec![3, 4, 5]);
+        assert_eq!(resolve(PinSelection::Edge(GridEdge::Right)), vec![2, 5]);
+        assert_eq!(
+            PinSelection::Indices(vec![6]).resolve(&positions, grid),
+            Err(SelectionError::OutOfRange { index: 6, count: 6 })
+        );
+        assert_eq!(
+            PinSelection::Edge(GridEdge::Top).resolve(&positions, None),
+            Err(SelectionError::NotAGrid)
+        );
+    }
+
+    #[test]
+    fn a_box_selects_the_particles_inside_it() {
+        let positions = vec![Vec3::ZERO, Vec3::ONE, Vec3::splat(2.0)];
+        let chosen = PinSelection::InBox {
+            min: Vec3::splat(0.5),
+            max: Vec3::splat(3.0),
+        }
+        .resolve(&positions, None);
+        assert_eq!(chosen, Ok(vec![1, 2]));
+    }
+}

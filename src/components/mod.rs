@@ -1,0 +1,19 @@
+//! The components of a garment entity: hot data as structure-of-arrays columns indexed by
+//! particle number, plus derived caches. See [`Particles`], [`Springs`], [`Triangles`],
+//! [`Pins`], [`UserForces`] and [`ClothTopology`].
+
+mod cloth;
+mod particles;
+mod pins;
+mod springs;
+mod topology;
+mod triangles;
+mod user_forces;
+
+pub use cloth::{Cloth, ClothMaterial, SpringCoefficients};
+pub use particles::Particles;
+pub use pins::Pins;
+pub use springs::{SpringKind, Springs};
+pub use topology::{ClothTopology, Csr, RenderMesh, SolverWorkspace};
+pub use triangles::Triangles;
+pub use user_forces::UserForces;

@@ -1,0 +1,137 @@
+//! World-wide settings and state: the step, gravity, air, solver choice, ground, clock,
+//! health, probes and scheduled edits.
+
+use std::collections::BTreeMap;
+
+use bevy_ecs::prelude::*;
+use glam::Vec3;
+
+use crate::builders::pins::PinSelection;
+use crate::builders::tear::Cut;
+use crate::solver::contact::GroundPlane;
+use crate::solver::forces::Air;
+use crate::solver::integrate::Integrator;
+
+/// How time advances: a frame is `substeps` steps of `dt`.
+#[derive(Resource, Debug, Clone, Copy, PartialEq)]
+pub struct StepSettings {
+    /// Length of one step [s].
+    pub dt: f32,
+    /// Steps per frame.
+    pub substeps: u32,
+}
+
+/// Gravitational acceleration [m/s²].
+#[derive(Resource, Debug, Clone, Copy, PartialEq)]
+pub struct Gravity(pub Vec3);
+
+/// The air every cloth moves through.
+#[derive(Resource, Debug, Clone, Copy, PartialEq, Default)]
+pub struct AirSettings(pub Air);
+
+/// The integrator every cloth uses, and its error tolerance when adaptive.
+#[derive(Resource, Debug, Clone, Copy, PartialEq)]
+pub struct SolverSettings {
+    /// Integration method.
+    pub integrator: Integrator,
+    /// Relative error tolerance of [`Integrator::Rk45`] [-].
+    pub tolerance: f32,
+}
+
+/// The ground plane, when the scene has one.
+#[derive(Resource, Debug, Clone, Copy, PartialEq, Default)]
+pub struct Ground(pub Option<GroundPlane>);
+
+/// Simulated time.
+#[derive(Resource, Debug, Clone, Copy, PartialEq, Default)]
+pub struct SimClock {
+    /// Time since the start [s].
+    pub time_s: f64,
+    /// Steps taken.
+    pub step: u64,
+    /// Frames completed.
+    pub frame: u64,
+}
+
+/// Limits past which a run is declared diverged.
+#[derive(Resource, Debug, Clone, Copy, PartialEq)]
+pub struct DivergenceLimit {
+    /// Largest spring strain tolerated [-].
+    pub max_strain: f32,
+}
+
+/// A cloth whose state went bad, found by the health check.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HealthProblem {
+    /// Name of the cloth.
+    pub cloth: String,
+    /// What is wrong with it.
+    pub problem: String,
+}
+
+/// The health check's verdict for the last frame.
+#[derive(Resource, Debug, Clone, Default, PartialEq)]
+pub struct HealthReport {
+    /// The first problem found, if any.
+    pub problem: Option<HealthProblem>,
+}
+
+/// Named measurements of the last frame, in name order. Any system may add a probe; the
+/// CLI writes all of them to `summary.json` and `probes.csv`.
+#[derive(Resource, Debug, Clone, Default, PartialEq)]
+pub struct Probes {
+    /// Probe values by name.
+    pub values: BTreeMap<&'static str, f64>,
+}
+
+impl Probes {
+    /// Sets probe `name` for this frame.
+    pub fn set(&mut self, name: &'static str, value: f64) {
+        self.values.insert(name, value);
+    }
+
+    /// The value of probe `name`, if measured.
+    pub fn get(&self, name: &str) -> Option<f64> {
+        self.values.get(name).copied()
+    }
+}
+
+/// Work the integrators did, summed over the run.
+#[derive(Resource, Debug, Clone, Copy, Default, PartialEq)]
+pub struct IntegratorStats {
+    /// Accepted internal steps.
+    pub accepted: u64,
+    /// Rejected internal steps (adaptive only).
+    pub rejected: u64,
+    /// Evaluations of the force model, start-of-step ones included.
+    pub evaluations: u64,
+}
+
+/// A change to a cloth's structure at a given time.
+#[derive(Debug, Clone, PartialEq)]
+pub enum EditAction {
+    /// Cut every spring and triangle that crosses the cut.
+    Tear(Cut),
+    /// Pin the selected particles where they are.
+    Pin(Vec<PinSelection>),
+    /// Release the selected particles.
+    Unpin(Vec<PinSelection>),
+}
+
+/// An edit due at a time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScheduledEdit {
+    /// When to apply it [s].
+    pub at_s: f64,
+    /// Name of the cloth it applies to.
+    pub cloth: String,
+    /// What to do.
+    pub action: EditAction,
+}
+
+/// Edits waiting for their time, sorted by it.
+#[derive(Resource, Debug, Clone, Default, PartialEq)]
+pub struct ScheduledEdits {
+    /// Pending edits, earliest first.
+    pub pending: Vec<ScheduledEdit>,
+}

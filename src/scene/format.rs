@@ -1,0 +1,276 @@
+//! Serde types of a scene file. They describe; they are never components. Every struct
+//! refuses unknown fields, so a misspelt field is an error rather than a silent default.
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use crate::builders::Placement;
+use crate::builders::pins::PinSelection;
+use crate::components::ClothMaterial;
+use crate::solver::integrate::Integrator;
+
+/// A whole run: world, cloths, solver, duration and outputs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Name of the scene; the default output folder is `out/<name>`.
+    pub name: String,
+    /// Gravitational acceleration [m/s²].
+    #[serde(default = "default_gravity")]
+    pub gravity: Vec3,
+    /// Drag and wind.
+    #[serde(default)]
+    pub air: AirDesc,
+    /// Integrator and step.
+    #[serde(default)]
+    pub solver: SolverDesc,
+    /// Frame rate and duration.
+    pub time: TimeDesc,
+    /// The cloths.
+    pub cloths: Vec<ClothDesc>,
+    /// The ground plane.
+    #[serde(default)]
+    pub ground: GroundDesc,
+    /// What to write.
+    #[serde(default)]
+    pub output: OutputDesc,
+    /// When to stop a run as diverged.
+    #[serde(default)]
+    pub divergence: DivergenceDesc,
+    /// Changes to cloths at given times: tears, pins, releases.
+    #[serde(default)]
+    pub edits: Vec<EditDesc>,
+}
+
+fn default_gravity() -> Vec3 {
+    Vec3::new(0.0, -9.81, 0.0)
+}
+
+/// Air drag and wind.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct AirDesc {
+    /// Linear drag rate [1/s]: each particle feels `−drag · m · v`.
+    pub drag: f32,
+    /// Mean wind velocity [m/s].
+    pub wind: Vec3,
+    /// Normal drag coefficient of the cloth surface [kg/m³], about ½ ρ_air C_d (≈ 0.6 in
+    /// air); 0 turns wind and aerodynamic drag off.
+    pub wind_drag: f32,
+    /// Periodic gusts.
+    pub gust: Option<GustDesc>,
+}
+
+/// Sinusoidal gusts.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GustDesc {
+    /// Relative amplitude of the wind speed [-].
+    pub amplitude: f32,
+    /// Period [s].
+    pub period_s: f32,
+}
+
+/// The integrator and the step. Give `substeps` (steps per frame) or `dt` (the step [s]),
+/// or both if they agree; the step is `1 / (fps · substeps)`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SolverDesc {
+    /// Integration method.
+    pub integrator: Integrator,
+    /// Step length [s]; must divide the frame time.
+    pub dt: Option<f32>,
+    /// Steps per frame.
+    pub substeps: Option<u32>,
+    /// Relative error tolerance of `Rk45` [-].
+    pub tolerance: f32,
+}
+
+impl Default for SolverDesc {
+    fn default() -> Self {
+        Self {
+            integrator: Integrator::SymplecticEuler,
+            dt: None,
+            substeps: None,
+            tolerance: 1e-4,
+        }
+    }
+}
+
+/// Steps per frame when a scene gives neither `dt` nor `substeps`.
+pub const DEFAULT_SUBSTEPS: u32 = 10;
+
+/// Frame rate and length of the run: give `duration_s` or `frames`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TimeDesc {
+    /// Frames per second [1/s].
+    pub fps: f32,
+    /// Length of the run [s].
+    pub duration_s: Option<f32>,
+    /// Number of frames.
+    pub frames: Option<u32>,
+}
+
+impl Default for TimeDesc {
+    fn default() -> Self {
+        Self {
+            fps: 60.0,
+            duration_s: None,
+            frames: None,
+        }
+    }
+}
+
+/// One cloth.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ClothDesc {
+    /// Unique name.
+    pub name: String,
+    /// How to build it.
+    pub shape: ShapeDesc,
+    /// Where it goes.
+    #[serde(default)]
+    pub placement: Placement,
+    /// What it is made of.
+    pub material: ClothMaterial,
+    /// Particles held in place from the start.
+    #[serde(default)]
+    pub pins: Vec<PinSelection>,
+    /// Initial velocity of every particle [m/s].
+    #[serde(default)]
+    pub velocity: Vec3,
+    /// Constant forces on chosen particles.
+    #[serde(default)]
+    pub user_forces: Vec<UserForceDesc>,
+}
+
+/// How a cloth's particles, springs and triangles are made.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ShapeDesc {
+    /// A rectangle of `resolution.0 × resolution.1` particles, `size` [m] wide and high, in
+    /// the local XY plane centred on the origin.
+    Grid {
+        /// Width and height [m].
+        size: (f32, f32),
+        /// Particles along the width and the height, each ≥ 2.
+        resolution: (u32, u32),
+    },
+    /// A triangle mesh from an OBJ file, relative to the scene file's folder.
+    Mesh {
+        /// Path of the OBJ file.
+        path: String,
+    },
+}
+
+/// A constant force on one particle.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UserForceDesc {
+    /// Particle number.
+    pub particle: u32,
+    /// Force [N].
+    pub force: Vec3,
+}
+
+/// The ground plane y = `height`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GroundDesc {
+    /// Whether there is a ground.
+    pub enabled: bool,
+    /// Its height [m].
+    pub height: f32,
+    /// Coulomb friction coefficient [-].
+    pub friction: f32,
+}
+
+impl Default for GroundDesc {
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            height: 0.0,
+            friction: 0.5,
+        }
+    }
+}
+
+/// Mesh file formats for frames.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum FrameFormat {
+    /// Wavefront OBJ with vertex normals.
+    Obj,
+    /// Binary little-endian PLY with vertex normals.
+    Ply,
+}
+
+/// What a run writes.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OutputDesc {
+    /// Output folder; `out/<scene name>` when not given. The `--out` flag overrides it.
+    pub directory: Option<String>,
+    /// Write every Nth frame (the first and last are always written).
+    pub every: u32,
+    /// Formats of the frame files; empty writes no frames.
+    pub formats: Vec<FrameFormat>,
+}
+
+impl Default for OutputDesc {
+    fn default() -> Self {
+        Self {
+            directory: None,
+            every: 1,
+            formats: vec![FrameFormat::Obj],
+        }
+    }
+}
+
+/// When a run counts as diverged (non-finite values always do).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DivergenceDesc {
+    /// Largest spring strain (elongation ratio minus one) tolerated [-].
+    pub max_strain: f32,
+}
+
+impl Default for DivergenceDesc {
+    fn default() -> Self {
+        Self { max_strain: 10.0 }
+    }
+}
+
+/// A change at a given time.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EditDesc {
+    /// When [s].
+    pub at_s: f32,
+    /// Name of the cloth.
+    pub cloth: String,
+    /// What to do.
+    pub action: EditActionDesc,
+}
+
+/// What an edit does.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum EditActionDesc {
+    /// Cut springs and triangles crossing the plane through `point` with normal `normal`,
+    /// within `radius` [m] of `point` if given.
+    Tear {
+        /// A point on the cut [m].
+        point: Vec3,
+        /// The cutting plane's normal.
+        normal: Vec3,
+        /// Reach of the cut [m].
+        #[serde(default)]
+        radius: Option<f32>,
+    },
+    /// Pin the selected particles where they are at that time.
+    Pin(Vec<PinSelection>),
+    /// Release the selected particles.
+    Unpin(Vec<PinSelection>),
+}

@@ -1,0 +1,290 @@
+//! Checks of a parsed scene's physics and logic. Each failure names the field and says
+//! what would be accepted. Checks that need the built cloth (pin indices against the
+//! particle count, mesh files) happen when the scene is built.
+
+use glam::Vec3;
+
+use super::format::{DEFAULT_SUBSTEPS, EditActionDesc, Scene, ShapeDesc};
+use super::load::SceneError;
+use crate::builders::pins::PinSelection;
+
+/// How a scene's time is cut into frames and steps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TimePlan {
+    /// Frames per second [1/s].
+    pub fps: f32,
+    /// Step length [s].
+    pub dt: f32,
+    /// Steps per frame.
+    pub substeps: u32,
+    /// Frames in the run.
+    pub frames: u32,
+}
+
+/// Relative mismatch tolerated between a given `dt` and the frame time it must divide.
+const DT_MATCH: f32 = 1e-3;
+
+/// Derives the frame count and step of `scene`.
+pub fn time_plan(scene: &Scene) -> Result<TimePlan, SceneError> {
+    let fps = positive("time.fps", scene.time.fps)?;
+    let frame_time = 1.0 / fps;
+    let substeps = match (scene.solver.dt, scene.solver.substeps) {
+        (_, Some(0)) => return Err(SceneError::invalid("solver.substeps", "must be at least 1")),
+        (None, Some(n)) => n,
+        (None, None) => DEFAULT_SUBSTEPS,
+        (Some(dt), given) => {
+            let dt = positive("solver.dt", dt)?;
+            let n = (frame_time / dt).round().max(1.0);
+            let fits = ((frame_time / n) - dt).abs() <= DT_MATCH * dt;
+            match given {
+                Some(s) if s as f32 != n || !fits => {
+                    return Err(SceneError::invalid(
+                        "solver.dt",
+                        format!(
+                            "{dt} s does not agree with substeps = {s} at {fps} fps (1 / (fps · substeps) = {} s); give one of them",
+                            frame_time / s as f32
+                        ),
+                    ));
+                }
+                _ if !fits => {
+                    return Err(SceneError::invalid(
+                        "solver.dt",
+                        format!(
+                            "{dt} s does not divide the frame time 1/{fps} s; use 1/({fps} · n) s, for example {} s",
+                            frame_time / n
+                        ),
+                    ));
+                }
+                _ => n as u32,
+            }
+        }
+    };
+    let frames = match (scene.time.duration_s, scene.time.frames) {
+        (Some(_), Some(_)) => {
+            return Err(SceneError::invalid(
+                "time.frames",
+                "give either duration_s or frames, not both",
+            ));
+        }
+        (None, None) => {
+            return Err(SceneError::invalid(
+                "time",
+                "give the length of the run as duration_s or frames",
+            ));
+        }
+        (Some(duration), None) => (positive("time.duration_s", duration)? * fps)
+            .round()
+            .max(1.0) as u32,
+        (None, Some(0)) => return Err(SceneError::invalid("time.frames", "must be at least 1")),
+        (None, Some(frames)) => frames,
+    };
+    Ok(TimePlan {
+        fps,
+        dt: frame_time / substeps as f32,
+        substeps,
+        frames,
+    })
+}
+
+/// Checks everything about `scene` that can be checked without building it.
+pub fn validate(scene: &Scene) -> Result<(), SceneError> {
+    if scene.name.is_empty()
+        || !scene
+            .name
+            .chars()
+            .all(|c| c.is_alphanumeric() || "-_.".contains(c))
+        || scene.name.starts_with('.')
+    {
+        return Err(SceneError::invalid(
+            "name",
+            "must be a non-empty file name of letters, digits, '-', '_' and '.' (it names the output folder)",
+        ));
+    }
+    finite_vec("gravity", scene.gravity)?;
+    non_negative("air.drag", scene.air.drag)?;
+    finite_vec("air.wind", scene.air.wind)?;
+    non_negative("air.wind_drag", scene.air.wind_drag)?;
+    if let Some(gust) = scene.air.gust {
+        finite("air.gust.amplitude", gust.amplitude)?;
+        positive("air.gust.period_s", gust.period_s)?;
+    }
+    let tolerance = positive("solver.tolerance", scene.solver.tolerance)?;
+    if tolerance >= 1.0 {
+        return Err(SceneError::invalid(
+            "solver.tolerance",
+            format!("{tolerance} is a relative error and must be below 1, typically 1e-6 to 1e-3"),
+        ));
+    }
+    time_plan(scene)?;
+
+    if scene.cloths.is_empty() {
+        return Err(SceneError::invalid(
+            "cloths",
+            "a scene needs at least one cloth",
+        ));
+    }
+    for (index, cloth) in scene.cloths.iter().enumerate() {
+        let field = |name: &str| format!("cloths[{index}].{name}");
+        if cloth.name.is_empty() {
+            return Err(SceneError::invalid(field("name"), "must not be empty"));
+        }
+        if scene.cloths[..index]
+            .iter()
+            .any(|other| other.name == cloth.name)
+        {
+            return Err(SceneError::invalid(
+                field("name"),
+                format!("`{}` names two cloths; names must be unique", cloth.name),
+            ));
+        }
+        match &cloth.shape {
+            ShapeDesc::Grid { size, resolution } => {
+                positive(&field("shape.size"), size.0)?;
+                positive(&field("shape.size"), size.1)?;
+                if resolution.0 < 2 || resolution.1 < 2 {
+                    return Err(SceneError::invalid(
+                        field("shape.resolution"),
+                        "a grid needs at least 2 × 2 particles",
+                    ));
+                }
+            }
+            ShapeDesc::Mesh { path } => {
+                if path.is_empty() {
+                    return Err(SceneError::invalid(
+                        field("shape.path"),
+                        "must name an OBJ file",
+                    ));
+                }
+            }
+        }
+        finite_vec(&field("placement.translation"), cloth.placement.translation)?;
+        finite_vec(
+            &field("placement.rotation_deg"),
+            cloth.placement.rotation_deg,
+        )?;
+        positive(&field("placement.scale"), cloth.placement.scale)?;
+        let material = &cloth.material;
+        positive(&field("material.density"), material.density).map_err(|_| {
+            SceneError::invalid(field("material.density"), format!("{} kg/m² would give particles no or negative mass; areal densities of fabric are about 0.05 to 0.5 kg/m²", material.density))
+        })?;
+        for (family, c) in [
+            ("stretch", material.stretch),
+            ("shear", material.shear),
+            ("bend", material.bend),
+        ] {
+            non_negative(&field(&format!("material.{family}.stiffness")), c.stiffness)?;
+            non_negative(&field(&format!("material.{family}.damping")), c.damping)?;
+        }
+        finite_vec(&field("velocity"), cloth.velocity)?;
+        for (k, force) in cloth.user_forces.iter().enumerate() {
+            finite_vec(&field(&format!("user_forces[{k}].force")), force.force)?;
+        }
+        for (k, pin) in cloth.pins.iter().enumerate() {
+            check_selection(&field(&format!("pins[{k}]")), pin)?;
+        }
+    }
+
+    finite("ground.height", scene.ground.height)?;
+    non_negative("ground.friction", scene.ground.friction)?;
+    if scene.output.every == 0 {
+        return Err(SceneError::invalid(
+            "output.every",
+            "must be at least 1 (1 writes every frame)",
+        ));
+    }
+    positive("divergence.max_strain", scene.divergence.max_strain)?;
+
+    for (k, edit) in scene.edits.iter().enumerate() {
+        let field = |name: &str| format!("edits[{k}].{name}");
+        non_negative(&field("at_s"), edit.at_s)?;
+        if !scene.cloths.iter().any(|c| c.name == edit.cloth) {
+            return Err(SceneError::invalid(
+                field("cloth"),
+                format!("no cloth is named `{}`", edit.cloth),
+            ));
+        }
+        match &edit.action {
+            EditActionDesc::Tear {
+                point,
+                normal,
+                radius,
+            } => {
+                finite_vec(&field("action.point"), *point)?;
+                finite_vec(&field("action.normal"), *normal)?;
+                if *normal == Vec3::ZERO {
+                    return Err(SceneError::invalid(
+                        field("action.normal"),
+                        "must not be zero",
+                    ));
+                }
+                if let Some(radius) = radius {
+                    positive(&field("action.radius"), *radius)?;
+                }
+            }
+            EditActionDesc::Pin(selections) | EditActionDesc::Unpin(selections) => {
+                for (s, selection) in selections.iter().enumerate() {
+                    check_selection(&field(&format!("action[{s}]")), selection)?;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+fn check_selection(field: &str, selection: &PinSelection) -> Result<(), SceneError> {
+    if let PinSelection::InBox { min, max } = selection {
+        finite_vec(field, *min)?;
+        finite_vec(field, *max)?;
+        if !min.cmple(*max).all() {
+            return Err(SceneError::invalid(
+                field,
+                format!("box min {min} must be below max {max} on every axis"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn finite(field: &str, value: f32) -> Result<f32, SceneError> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(SceneError::invalid(
+            field,
+            format!("{value} is not a finite number"),
+        ))
+    }
+}
+
+fn positive(field: &str, value: f32) -> Result<f32, SceneError> {
+    if finite(field, value)? > 0.0 {
+        Ok(value)
+    } else {
+        Err(SceneError::invalid(
+            field,
+            format!("must be greater than 0, got {value}"),
+        ))
+    }
+}
+
+fn non_negative(field: &str, value: f32) -> Result<f32, SceneError> {
+    if finite(field, value)? >= 0.0 {
+        Ok(value)
+    } else {
+        Err(SceneError::invalid(
+            field,
+            format!("must not be negative, got {value}"),
+        ))
+    }
+}
+
+fn finite_vec(field: &str, value: Vec3) -> Result<Vec3, SceneError> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(SceneError::invalid(
+            field,
+            format!("{value} has a non-finite component"),
+        ))
+    }
+}

@@ -1,0 +1,134 @@
+//! The engine as a library: a world built from a scene, stepped a frame at a time.
+
+use std::path::Path;
+
+use bevy_ecs::prelude::*;
+
+use crate::components::{Cloth, Particles, RenderMesh, Triangles};
+use crate::resources::{HealthReport, IntegratorStats, Probes, SimClock};
+use crate::scene::load::SceneFile;
+use crate::scene::{Scene, SceneCounts, SceneError, spawn_scene};
+use crate::schedule::{FrameSchedule, RenderSchedule, add_schedules};
+
+/// A run that went bad: where and when.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("diverged in frame {frame} (t = {time_s:.4} s): cloth `{cloth}`: {problem}")]
+pub struct Divergence {
+    /// The frame being computed when it happened (1-based).
+    pub frame: u64,
+    /// Simulated time when it was detected [s].
+    pub time_s: f64,
+    /// Name of the cloth.
+    pub cloth: String,
+    /// What went wrong and where in the cloth.
+    pub problem: String,
+}
+
+/// One cloth's surface as a renderer or exporter sees it.
+#[derive(Debug, Clone, Copy)]
+pub struct ClothSurface<'a> {
+    /// Name of the cloth.
+    pub name: &'a str,
+    /// Vertex positions [m].
+    pub positions: &'a [glam::Vec3],
+    /// Unit vertex normals.
+    pub normals: &'a [glam::Vec3],
+    /// Triangles.
+    pub triangles: &'a [[u32; 3]],
+}
+
+/// A simulation: the ECS world holding the scene's cloths and resources, with the
+/// schedules that step it.
+pub struct Simulation {
+    world: World,
+    counts: SceneCounts,
+}
+
+impl Simulation {
+    /// Builds the world of `scene`; mesh paths are relative to `base_dir`.
+    pub fn new(scene: &Scene, base_dir: &Path) -> Result<Self, SceneError> {
+        let mut world = World::new();
+        let counts = spawn_scene(&mut world, scene, base_dir)?;
+        add_schedules(&mut world);
+        world.run_schedule(RenderSchedule);
+        Ok(Self { world, counts })
+    }
+
+    /// Builds the world of a scene read from a file; errors point into the file.
+    pub fn from_file(file: &SceneFile) -> Result<Self, SceneError> {
+        Self::new(&file.scene, file.base_dir()).map_err(|e| e.located(&file.path, &file.text))
+    }
+
+    /// Computes one frame. On divergence the world keeps the bad state for inspection
+    /// and the render meshes keep the last good frame.
+    pub fn step_frame(&mut self) -> Result<(), Divergence> {
+        self.world.run_schedule(FrameSchedule);
+        if let Some(problem) = self.world.resource::<HealthReport>().problem.clone() {
+            let clock = self.clock();
+            return Err(Divergence {
+                frame: clock.frame.max(1),
+                time_s: clock.time_s,
+                cloth: problem.cloth,
+                problem: problem.problem,
+            });
+        }
+        self.world.run_schedule(RenderSchedule);
+        Ok(())
+    }
+
+    /// What the scene built.
+    pub fn counts(&self) -> SceneCounts {
+        self.counts
+    }
+
+    /// The clock.
+    pub fn clock(&self) -> SimClock {
+        *self.world.resource::<SimClock>()
+    }
+
+    /// The probes of the last frame.
+    pub fn probes(&self) -> &Probes {
+        self.world.resource::<Probes>()
+    }
+
+    /// Work done by the integrators so far.
+    pub fn integrator_stats(&self) -> IntegratorStats {
+        *self.world.resource::<IntegratorStats>()
+    }
+
+    /// The world, to query components.
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// The world, to edit components: changes to springs, triangles and pins take effect
+    /// from the next frame.
+    pub fn world_mut(&mut self) -> &mut World {
+        &mut self.world
+    }
+
+    /// The entity of the cloth named `name`.
+    pub fn cloth_entity(&mut self, name: &str) -> Option<Entity> {
+        self.world
+            .query::<(Entity, &Cloth)>()
+            .iter(&self.world)
+            .find(|(_, c)| c.name == name)
+            .map(|(e, _)| e)
+    }
+
+    /// The surfaces of all cloths as of the last completed frame, in spawn order.
+    pub fn surfaces(&mut self) -> Vec<ClothSurface<'_>> {
+        let mut query = self
+            .world
+            .query::<(&Cloth, &Particles, &RenderMesh, &Triangles)>();
+        query
+            .iter(&self.world)
+            .map(|(cloth, particles, mesh, triangles)| ClothSurface {
+                name: &cloth.name,
+                positions: &particles.position,
+                normals: &mesh.normals,
+                triangles: &triangles.indices,
+            })
+            .collect()
+    }
+}

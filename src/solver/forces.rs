@@ -1,0 +1,277 @@
+//! The force model: gravity, air drag, per-triangle wind, damped springs and user forces,
+//! as a pure function of the state `(x, v, t)` that every integrator evaluates.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::PARALLEL_MIN_LEN;
+use super::integrate::Dynamics;
+use crate::components::{ClothTopology, Springs};
+
+/// Air around the cloth.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Air {
+    /// Linear drag rate [1/s]: each particle feels `−drag · m · v`, so the damping does not
+    /// depend on how finely the cloth is sampled.
+    pub drag: f32,
+    /// Mean wind velocity [m/s].
+    pub wind: Vec3,
+    /// Normal drag coefficient of the cloth surface [kg/m³] (about ½ ρ_air C_d): a triangle
+    /// of area A feels `wind_drag · A · |u| (n·u) n` for the wind relative to it `u`
+    /// (Meyer et al., as in Durupınar §3.1.2.3). With no wind it still damps flapping.
+    pub wind_drag: f32,
+    /// Optional periodic gusts on top of the mean wind.
+    pub gust: Option<Gust>,
+}
+
+/// A sinusoidal modulation of the wind speed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Gust {
+    /// Relative amplitude: the wind is `wind · (1 + amplitude · sin(2π t / period_s))`.
+    pub amplitude: f32,
+    /// Period of the gusts [s], > 0.
+    pub period_s: f32,
+}
+
+impl Air {
+    /// Wind velocity at time `t` [s].
+    pub fn wind_at(&self, t: f32) -> Vec3 {
+        match self.gust {
+            Some(gust) => {
+                self.wind
+                    * (1.0 + gust.amplitude * (std::f32::consts::TAU * t / gust.period_s).sin())
+            }
+            None => self.wind,
+        }
+    }
+}
+
+/// Force on particle `i` of a damped Hooke spring from `i` to `j` (Durupınar eq. 3.1.1.1):
+/// `f_i = −[k (|d| − r) + k_d (v_i − v_j)·d̂] d̂` with `d = x_i − x_j`; `f_j = −f_i`.
+#[inline]
+pub fn spring_force(xi: Vec3, xj: Vec3, vi: Vec3, vj: Vec3, rest: f32, k: f32, kd: f32) -> Vec3 {
+    let d = xi - xj;
+    let length = d.length();
+    if length <= f32::EPSILON * rest {
+        return Vec3::ZERO;
+    }
+    let n = d / length;
+    -(k * (length - rest) + kd * (vi - vj).dot(n)) * n
+}
+
+/// Wind force on each vertex of a triangle [N]: a third of the normal drag on the triangle.
+#[inline]
+pub fn triangle_wind_force(x: [Vec3; 3], v: [Vec3; 3], wind: Vec3, wind_drag: f32) -> Vec3 {
+    let normal = (x[1] - x[0]).cross(x[2] - x[0]);
+    let twice_area = normal.length();
+    if twice_area == 0.0 {
+        return Vec3::ZERO;
+    }
+    let n = normal / twice_area;
+    let relative = wind - (v[0] + v[1] + v[2]) / 3.0;
+    let force = wind_drag * 0.5 * twice_area * relative.length() * relative.dot(n) * n;
+    force / 3.0
+}
+
+/// Buffers the force model writes per element before gathering per particle, so that each
+/// particle's sum runs over its elements in a fixed order whatever the thread count.
+#[derive(Debug, Clone, Default)]
+pub struct ForceScratch {
+    spring: Vec<Vec3>,
+    triangle: Vec<Vec3>,
+}
+
+/// Everything that exerts force on one cloth, borrowed for one evaluation.
+#[derive(Debug, Clone, Copy)]
+pub struct ForceModel<'a> {
+    /// Inverse masses [1/kg] (not zeroed for pins: pinned particles feel weight too).
+    pub inv_mass: &'a [f32],
+    /// The cloth's springs.
+    pub springs: &'a Springs,
+    /// The cloth's triangles, for wind.
+    pub triangles: &'a [[u32; 3]],
+    /// Incidence rows of springs and triangles.
+    pub topology: &'a ClothTopology,
+    /// Gravitational acceleration [m/s²].
+    pub gravity: Vec3,
+    /// Drag and wind.
+    pub air: Air,
+    /// Sparse external forces [N].
+    pub user_forces: &'a [(u32, Vec3)],
+}
+
+impl ForceModel<'_> {
+    /// Total force on every particle at state `(x, v)` and time `t` [s], written to `out`.
+    pub fn eval(
+        &self,
+        x: &[Vec3],
+        v: &[Vec3],
+        t: f32,
+        scratch: &mut ForceScratch,
+        out: &mut [Vec3],
+    ) {
+        let springs = self.springs;
+        scratch.spring.resize(springs.len(), Vec3::ZERO);
+        scratch
+            .spring
+            .par_iter_mut()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .enumerate()
+            .for_each(|(s, f)| {
+                let [i, j] = springs.pairs[s].map(|p| p as usize);
+                *f = spring_force(
+                    x[i],
+                    x[j],
+                    v[i],
+                    v[j],
+                    springs.rest_length[s],
+                    springs.stiffness[s],
+                    springs.damping[s],
+                );
+            });
+
+        let wind = self.air.wind_at(t);
+        let with_wind = self.air.wind_drag > 0.0;
+        scratch
+            .triangle
+            .resize(if with_wind { self.triangles.len() } else { 0 }, Vec3::ZERO);
+        scratch
+            .triangle
+            .par_iter_mut()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .enumerate()
+            .for_each(|(t, f)| {
+                let tri = self.triangles[t].map(|p| p as usize);
+                *f = triangle_wind_force(
+                    tri.map(|p| x[p]),
+                    tri.map(|p| v[p]),
+                    wind,
+                    self.air.wind_drag,
+                );
+            });
+
+        let scratch = &*scratch;
+        out.par_iter_mut()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .enumerate()
+            .for_each(|(i, f)| {
+                let mass = 1.0 / self.inv_mass[i];
+                let mut total = mass * (self.gravity - self.air.drag * v[i]);
+                for &s in self.topology.particle_springs.row(i) {
+                    let sf = scratch.spring[s as usize];
+                    total += if springs.pairs[s as usize][0] as usize == i {
+                        sf
+                    } else {
+                        -sf
+                    };
+                }
+                if with_wind {
+                    for &t in self.topology.particle_triangles.row(i) {
+                        total += scratch.triangle[t as usize];
+                    }
+                }
+                *f = total;
+            });
+        for &(particle, force) in self.user_forces {
+            out[particle as usize] += force;
+        }
+    }
+
+    /// Potential energy at positions `x` [J]: gravitational (zero at the origin) plus the
+    /// elastic energy `½ k (|d| − r)²` of every spring.
+    pub fn potential_energy(&self, x: &[Vec3]) -> f64 {
+        let gravity: f64 = x
+            .iter()
+            .zip(self.inv_mass)
+            .map(|(p, w)| -f64::from(self.gravity.dot(*p) / w))
+            .sum();
+        let elastic: f64 = (0..self.springs.len())
+            .map(|s| {
+                let [i, j] = self.springs.pairs[s].map(|p| p as usize);
+                let stretch = f64::from((x[i] - x[j]).length() - self.springs.rest_length[s]);
+                0.5 * f64::from(self.springs.stiffness[s]) * stretch * stretch
+            })
+            .sum();
+        gravity + elastic
+    }
+}
+
+/// A cloth's [`ForceModel`] seen as [`Dynamics`]: forces divided by mass, with pinned
+/// particles (zero free inverse mass) never accelerating.
+pub struct ClothDynamics<'a> {
+    /// The forces.
+    pub model: ForceModel<'a>,
+    /// Inverse masses with pinned particles at zero [1/kg].
+    pub free_inv_mass: &'a [f32],
+    /// Element buffers for [`ForceModel::eval`].
+    pub scratch: &'a mut ForceScratch,
+}
+
+impl Dynamics for ClothDynamics<'_> {
+    fn acceleration(&mut self, x: &[Vec3], v: &[Vec3], t: f32, out: &mut [Vec3]) {
+        self.model.eval(x, v, t, self.scratch, out);
+        out.par_iter_mut()
+            .zip(self.free_inv_mass.par_iter())
+            .with_min_len(PARALLEL_MIN_LEN)
+            .for_each(|(a, w)| *a *= *w);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stretched_spring_pulls_with_hookes_law() {
+        let f = spring_force(
+            Vec3::new(1.5, 0.0, 0.0),
+            Vec3::ZERO,
+            Vec3::ZERO,
+            Vec3::ZERO,
+            1.0,
+            10.0,
+            0.0,
+        );
+        assert!((f - Vec3::new(-5.0, 0.0, 0.0)).length() < 1e-6);
+    }
+
+    #[test]
+    fn spring_damping_opposes_relative_velocity_along_the_spring_only() {
+        let f = spring_force(
+            Vec3::X,
+            Vec3::ZERO,
+            Vec3::new(2.0, 3.0, 0.0),
+            Vec3::ZERO,
+            1.0,
+            0.0,
+            0.5,
+        );
+        assert!((f - Vec3::new(-1.0, 0.0, 0.0)).length() < 1e-6);
+    }
+
+    #[test]
+    fn wind_on_a_facing_triangle_is_drag_times_area_times_speed_squared() {
+        // A right triangle of area 0.5 m² in the xy plane, wind 4 m/s along +z.
+        let x = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let per_vertex = triangle_wind_force(x, [Vec3::ZERO; 3], Vec3::new(0.0, 0.0, 4.0), 0.6);
+        let total = 3.0 * per_vertex;
+        assert!((total - Vec3::new(0.0, 0.0, 0.6 * 0.5 * 16.0)).length() < 1e-5);
+        // Wind in the plane of the cloth exerts no normal drag.
+        let edge_on = triangle_wind_force(x, [Vec3::ZERO; 3], Vec3::new(4.0, 0.0, 0.0), 0.6);
+        assert_eq!(edge_on, Vec3::ZERO);
+    }
+
+    #[test]
+    fn gusts_modulate_the_wind_around_its_mean() {
+        let air = Air {
+            wind: Vec3::X,
+            gust: Some(Gust {
+                amplitude: 0.5,
+                period_s: 2.0,
+            }),
+            ..Air::default()
+        };
+        assert!((air.wind_at(0.5) - Vec3::new(1.5, 0.0, 0.0)).length() < 1e-6);
+        assert!((air.wind_at(1.5) - Vec3::new(0.5, 0.0, 0.0)).length() < 1e-6);
+    }
+}

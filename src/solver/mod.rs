@@ -1,0 +1,14 @@
+//! Pure kernels over slices: forces, integrators, constraints, contact, probes. Nothing
+//! here touches the ECS, so every kernel can be tested and benchmarked on plain data.
+
+pub mod contact;
+pub mod forces;
+pub mod geometry;
+pub mod health;
+pub mod integrate;
+pub mod pins;
+pub mod probes;
+
+/// Below this many items a parallel loop runs on one thread: splitting costs more than it
+/// saves on small cloths.
+pub(crate) const PARALLEL_MIN_LEN: usize = 512;

@@ -1,0 +1,109 @@
+//! End-of-frame work: the health check, the probes and the frame count.
+
+use bevy_ecs::prelude::*;
+use glam::Vec3;
+
+use super::forces::cloth_force_model;
+use crate::components::{
+    Cloth, ClothTopology, Particles, Pins, SolverWorkspace, Springs, Triangles, UserForces,
+};
+use crate::resources::{
+    AirSettings, DivergenceLimit, Gravity, HealthProblem, HealthReport, Probes, SimClock,
+};
+use crate::schedule::{FrameSystems, SimSchedules};
+use crate::solver::health::check_health;
+use crate::solver::pins::pin_reaction;
+use crate::solver::probes::{kinetic_energy, max_strain};
+
+/// Records the first cloth whose state is non-finite or stretched past the divergence
+/// limit (MuJoCo's `mj_checkPos`, as a named stage). Runs in [`FrameSystems::Finish`].
+pub fn check_cloth_health(
+    limit: Res<DivergenceLimit>,
+    mut health: ResMut<HealthReport>,
+    cloths: Query<(&Cloth, &Particles, &Springs)>,
+) {
+    if health.problem.is_some() {
+        return;
+    }
+    for (cloth, particles, springs) in &cloths {
+        if let Err(problem) = check_health(
+            &particles.position,
+            &particles.velocity,
+            springs,
+            limit.max_strain,
+        ) {
+            health.problem = Some(HealthProblem {
+                cloth: cloth.name.clone(),
+                problem: problem.to_string(),
+            });
+            return;
+        }
+    }
+}
+
+/// Measures the frame's probes over all cloths: `kinetic_energy_j`, `potential_energy_j`
+/// (gravity about y = 0 plus spring energy), `max_strain` and `pin_force_n` (magnitude of
+/// the total force the pins carry, from the forces at the frame's final state).
+/// Runs in [`FrameSystems::Finish`].
+pub fn measure_probes(
+    gravity: Res<Gravity>,
+    air: Res<AirSettings>,
+    clock: Res<SimClock>,
+    mut probes: ResMut<Probes>,
+    mut cloths: Query<(
+        &Particles,
+        &Springs,
+        &Triangles,
+        &ClothTopology,
+        &UserForces,
+        &Pins,
+        &mut SolverWorkspace,
+    )>,
+) {
+    let (mut kinetic, mut potential, mut strain, mut pin_force) =
+        (0.0, 0.0, f32::NEG_INFINITY, Vec3::ZERO);
+    for (particles, springs, triangles, topology, user_forces, pins, mut workspace) in &mut cloths {
+        let model = cloth_force_model(
+            particles,
+            springs,
+            triangles,
+            topology,
+            user_forces,
+            &gravity,
+            &air,
+        );
+        kinetic += kinetic_energy(&particles.velocity, &particles.inv_mass);
+        potential += model.potential_energy(&particles.position);
+        strain = strain.max(max_strain(&particles.position, springs));
+        if !pins.is_empty() {
+            let SolverWorkspace { forces, force, .. } = &mut *workspace;
+            force.resize(particles.len(), Vec3::ZERO);
+            model.eval(
+                &particles.position,
+                &particles.velocity,
+                clock.time_s as f32,
+                forces,
+                force,
+            );
+            pin_force += pin_reaction(&pins.particles, force);
+        }
+    }
+    probes.set("kinetic_energy_j", kinetic);
+    probes.set("potential_energy_j", potential);
+    probes.set("max_strain", f64::from(strain.max(f32::MIN)));
+    probes.set("pin_force_n", f64::from(pin_force.length()));
+}
+
+/// Counts the frame. Runs in [`FrameSystems::Finish`], last.
+pub fn count_frame(mut clock: ResMut<SimClock>) {
+    clock.frame += 1;
+}
+
+/// Adds this module's systems.
+pub fn add_to(schedules: &mut SimSchedules) {
+    schedules.frame.add_systems(
+        (check_cloth_health, measure_probes, count_frame)
+            .chain()
+            .in_set(FrameSystems::Finish),
+    );
+}

@@ -1,0 +1,63 @@
+//! Applying scheduled edits: tears, pins and releases at their time.
+
+use bevy_ecs::prelude::*;
+
+use crate::builders::tear::tear;
+use crate::components::{Cloth, Particles, Pins, Springs, Triangles};
+use crate::resources::{EditAction, ScheduledEdits, SimClock};
+use crate::schedule::{FrameSystems, SimSchedules};
+
+/// Applies every edit whose time has come. Structure changes here are what
+/// [`rebuild_cloth_topology`](crate::systems::prepare::rebuild_cloth_topology) picks up.
+/// A box selection that holds no particle at that time pins or releases nothing.
+/// Runs in [`FrameSystems::Input`].
+pub fn apply_scheduled_edits(
+    clock: Res<SimClock>,
+    mut edits: ResMut<ScheduledEdits>,
+    mut cloths: Query<(&Cloth, &Particles, &mut Springs, &mut Triangles, &mut Pins)>,
+) {
+    let due = edits
+        .pending
+        .iter()
+        .take_while(|e| e.at_s <= clock.time_s)
+        .count();
+    if due == 0 {
+        return;
+    }
+    for edit in edits.pending.drain(..due) {
+        let Some((cloth, particles, mut springs, mut triangles, mut pins)) = cloths
+            .iter_mut()
+            .find(|(cloth, ..)| cloth.name == edit.cloth)
+        else {
+            continue;
+        };
+        match &edit.action {
+            EditAction::Tear(cut) => {
+                tear(cut, &particles.position, &mut springs, &mut triangles);
+            }
+            EditAction::Pin(selections) => {
+                for particle in selections.iter().flat_map(|s| {
+                    s.resolve(&particles.position, cloth.grid)
+                        .unwrap_or_default()
+                }) {
+                    pins.insert(particle, particles.position[particle as usize]);
+                }
+            }
+            EditAction::Unpin(selections) => {
+                for particle in selections.iter().flat_map(|s| {
+                    s.resolve(&particles.position, cloth.grid)
+                        .unwrap_or_default()
+                }) {
+                    pins.remove(particle);
+                }
+            }
+        }
+    }
+}
+
+/// Adds this module's systems.
+pub fn add_to(schedules: &mut SimSchedules) {
+    schedules
+        .frame
+        .add_systems(apply_scheduled_edits.in_set(FrameSystems::Input));
+}

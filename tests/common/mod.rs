@@ -1,0 +1,47 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code, reason = "each test binary uses a different subset")]
+
+use std::path::Path;
+
+use selvedge::Simulation;
+use selvedge::scene::{Scene, parse_scene};
+
+/// Parses and validates scene text.
+pub fn scene(text: &str) -> Scene {
+    parse_scene(text, Path::new("test.ron"))
+        .unwrap_or_else(|e| panic!("test scene is invalid: {e}"))
+}
+
+/// Builds a simulation from scene text.
+pub fn simulation(text: &str) -> Simulation {
+    Simulation::new(&scene(text), Path::new("scenes"))
+        .unwrap_or_else(|e| panic!("test scene does not build: {e}"))
+}
+
+/// Steps `frames` frames, panicking on divergence.
+pub fn run_frames(simulation: &mut Simulation, frames: u32) {
+    for _ in 0..frames {
+        simulation.step_frame().unwrap_or_else(|e| panic!("{e}"));
+    }
+}
+
+/// The value of a probe after the last frame.
+pub fn probe(simulation: &Simulation, name: &str) -> f64 {
+    simulation
+        .probes()
+        .get(name)
+        .unwrap_or_else(|| panic!("no probe {name}"))
+}
+
+/// A cotton-like test material with the given stretch stiffness [N/m] and damping.
+pub fn material(stiffness: f32, damping: f32) -> String {
+    format!(
+        "(density: 0.2, stretch: (stiffness: {stiffness}, damping: {damping}), \
+         shear: (stiffness: {}, damping: {}), bend: (stiffness: {}, damping: {}))",
+        stiffness / 10.0,
+        damping / 10.0,
+        stiffness / 100.0,
+        damping / 100.0
+    )
+}
+pub mod oscillator;

@@ -1,0 +1,28 @@
+//! Statics: a damped hanging cloth comes to rest with its pins carrying its weight.
+
+mod common;
+
+const DENSITY: f64 = 0.2;
+const G: f64 = 9.81;
+
+#[test]
+fn a_hanging_cloth_comes_to_rest_and_the_pins_carry_its_weight() {
+    let mut sim = common::simulation(&format!(
+        "Scene(name: \"hang\", gravity: (0.0, -9.81, 0.0), air: (drag: 4.0),
+          solver: (integrator: SymplecticEuler, substeps: 20), time: (fps: 60, duration_s: 10.0),
+          cloths: [(name: \"c\", shape: Grid(size: (1.0, 1.0), resolution: (16, 16)),
+                    placement: (translation: (0.0, 2.0, 0.0)),
+                    material: {}, pins: [Corners([TopLeft, TopRight])])])",
+        common::material(100.0, 0.05)
+    ));
+    common::run_frames(&mut sim, 600);
+    let weight = DENSITY * 1.0 * G;
+    let kinetic = common::probe(&sim, "kinetic_energy_j");
+    let pin_force = common::probe(&sim, "pin_force_n");
+    assert!(kinetic < 1e-6, "still moving: kinetic energy {kinetic} J");
+    assert!(
+        (pin_force - weight).abs() < 0.005 * weight,
+        "pins carry {pin_force} N, the cloth weighs {weight} N"
+    );
+    eprintln!("pin force {pin_force} N, weight {weight} N, kinetic energy {kinetic:e} J");
+}
