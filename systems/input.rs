@@ -4,23 +4,22 @@ use bevy_ecs::prelude::*;
 
 use crate::builders::tear::tear;
 use crate::components::{Cloth, Particles, Pins, Springs, Triangles};
-use crate::resources::{EditAction, ScheduledEdits, SimClock};
+use crate::resources::{EditAction, ScheduledEdits, SimClock, StepSettings};
 use crate::schedule::{FrameSystems, SimSchedules};
 
-/// Applies every edit whose time has come. Structure changes here are what
+/// Applies every edit whose time has come (within half a step, so that rounding of the
+/// clock never delays an edit by a frame). Structure changes here are what
 /// [`rebuild_cloth_topology`](crate::systems::prepare::rebuild_cloth_topology) picks up.
 /// A box selection that holds no particle at that time pins or releases nothing.
 /// Runs in [`FrameSystems::Input`].
 pub fn apply_scheduled_edits(
     clock: Res<SimClock>,
+    settings: Res<StepSettings>,
     mut edits: ResMut<ScheduledEdits>,
     mut cloths: Query<(&Cloth, &Particles, &mut Springs, &mut Triangles, &mut Pins)>,
 ) {
-    let due = edits
-        .pending
-        .iter()
-        .take_while(|e| e.at_s <= clock.time_s)
-        .count();
+    let now = clock.time_s + 0.5 * f64::from(settings.dt);
+    let due = edits.pending.iter().take_while(|e| e.at_s <= now).count();
     if due == 0 {
         return;
     }

@@ -51,7 +51,7 @@ mod tests {
         let total: f32 = masses.iter().sum();
         assert!((total - 0.3).abs() < 1e-6);
         assert!(
-            (masses[0] - 0.2).abs() < 1e-6,
+            (masses[0] - 0.1).abs() < 1e-6,
             "vertex 0 is on both triangles"
         );
     }
