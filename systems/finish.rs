@@ -3,13 +3,9 @@
 use bevy_ecs::prelude::*;
 use glam::Vec3;
 
-use super::forces::cloth_force_model;
-use crate::components::{
-    Cloth, ClothTopology, Particles, Pins, SolverWorkspace, Springs, Triangles, UserForces,
-};
-use crate::resources::{
-    AirSettings, DivergenceLimit, Gravity, HealthProblem, HealthReport, Probes, SimClock,
-};
+use super::forces::{ForceElements, ForceEnvironment};
+use crate::components::{Cloth, Particles, Pins, SolverWorkspace, Springs};
+use crate::resources::{DivergenceLimit, HealthProblem, HealthReport, Probes, SimClock};
 use crate::schedule::{FrameSystems, SimSchedules};
 use crate::solver::health::check_health;
 use crate::solver::pins::pin_reaction;
@@ -46,42 +42,24 @@ pub fn check_cloth_health(
 /// the total force the pins carry, from the forces at the frame's final state).
 /// Runs in [`FrameSystems::Finish`].
 pub fn measure_probes(
-    gravity: Res<Gravity>,
-    air: Res<AirSettings>,
-    clock: Res<SimClock>,
+    environment: ForceEnvironment,
     mut probes: ResMut<Probes>,
-    mut cloths: Query<(
-        &Particles,
-        &Springs,
-        &Triangles,
-        &ClothTopology,
-        &UserForces,
-        &Pins,
-        &mut SolverWorkspace,
-    )>,
+    mut cloths: Query<(&Particles, ForceElements, &Pins, &mut SolverWorkspace)>,
 ) {
     let (mut kinetic, mut potential, mut strain, mut pin_force) =
         (0.0, 0.0, f32::NEG_INFINITY, Vec3::ZERO);
-    for (particles, springs, triangles, topology, user_forces, pins, mut workspace) in &mut cloths {
-        let model = cloth_force_model(
-            particles,
-            springs,
-            triangles,
-            topology,
-            user_forces,
-            &gravity,
-            &air,
-        );
+    for (particles, elements, pins, mut workspace) in &mut cloths {
+        let model = environment.model(&particles.inv_mass, elements);
         kinetic += kinetic_energy(&particles.velocity, &particles.inv_mass);
         potential += model.potential_energy(&particles.position);
-        strain = strain.max(max_strain(&particles.position, springs));
+        strain = strain.max(max_strain(&particles.position, model.springs));
         if !pins.is_empty() {
             let SolverWorkspace { forces, force, .. } = &mut *workspace;
             force.resize(particles.len(), Vec3::ZERO);
             model.eval(
                 &particles.position,
                 &particles.velocity,
-                clock.time_s as f32,
+                environment.time(),
                 forces,
                 force,
             );

@@ -1,6 +1,7 @@
 //! Accumulating the forces on every cloth at the start of a step.
 
 use bevy_ecs::prelude::*;
+use bevy_ecs::system::SystemParam;
 
 use crate::components::{
     ClothTopology, Particles, SolverWorkspace, Springs, Triangles, UserForces,
@@ -9,57 +10,68 @@ use crate::resources::{AirSettings, Gravity, SimClock};
 use crate::schedule::{SimSchedules, SubstepSystems};
 use crate::solver::forces::ForceModel;
 
-/// The force model of one cloth in the world's gravity and air.
-pub(crate) fn cloth_force_model<'a>(
-    particles: &'a Particles,
-    springs: &'a Springs,
-    triangles: &'a Triangles,
-    topology: &'a ClothTopology,
-    user_forces: &'a UserForces,
-    gravity: &Gravity,
-    air: &AirSettings,
-) -> ForceModel<'a> {
-    ForceModel {
-        inv_mass: &particles.inv_mass,
-        springs,
-        triangles: &triangles.indices,
-        topology,
-        gravity: gravity.0,
-        air: air.0,
-        user_forces: &user_forces.forces,
+/// The components of a cloth that exert force besides its particles, to query together.
+pub type ForceElements = (
+    &'static Springs,
+    &'static Triangles,
+    &'static ClothTopology,
+    &'static UserForces,
+);
+
+/// What a [`ForceElements`] query yields for one cloth.
+pub type ForceElementsItem<'a> = (
+    &'a Springs,
+    &'a Triangles,
+    &'a ClothTopology,
+    &'a UserForces,
+);
+
+/// The world's gravity and air, and the time, as the force model sees them.
+#[derive(SystemParam)]
+pub struct ForceEnvironment<'w> {
+    gravity: Res<'w, Gravity>,
+    air: Res<'w, AirSettings>,
+    clock: Res<'w, SimClock>,
+}
+
+impl ForceEnvironment<'_> {
+    /// The force model of a cloth with inverse masses `inv_mass` [1/kg] and `elements`.
+    pub fn model<'a>(
+        &self,
+        inv_mass: &'a [f32],
+        elements: ForceElementsItem<'a>,
+    ) -> ForceModel<'a> {
+        let (springs, triangles, topology, user_forces) = elements;
+        ForceModel {
+            inv_mass,
+            springs,
+            triangles: &triangles.indices,
+            topology,
+            gravity: self.gravity.0,
+            air: self.air.0,
+            user_forces: &user_forces.forces,
+        }
+    }
+
+    /// The current time [s].
+    pub fn time(&self) -> f32 {
+        self.clock.time_s as f32
     }
 }
 
 /// Writes the total force on every particle at the current state into
 /// [`Particles::force`]. Runs in [`SubstepSystems::Forces`].
 pub fn accumulate_forces(
-    gravity: Res<Gravity>,
-    air: Res<AirSettings>,
-    clock: Res<SimClock>,
-    mut cloths: Query<(
-        &mut Particles,
-        &Springs,
-        &Triangles,
-        &ClothTopology,
-        &UserForces,
-        &mut SolverWorkspace,
-    )>,
+    environment: ForceEnvironment,
+    mut cloths: Query<(&mut Particles, ForceElements, &mut SolverWorkspace)>,
 ) {
-    for (mut particles, springs, triangles, topology, user_forces, mut workspace) in &mut cloths {
+    for (mut particles, elements, mut workspace) in &mut cloths {
         let mut force = std::mem::take(&mut particles.force);
-        let model = cloth_force_model(
-            &particles,
-            springs,
-            triangles,
-            topology,
-            user_forces,
-            &gravity,
-            &air,
-        );
+        let model = environment.model(&particles.inv_mass, elements);
         model.eval(
             &particles.position,
             &particles.velocity,
-            clock.time_s as f32,
+            environment.time(),
             &mut workspace.forces,
             &mut force,
         );

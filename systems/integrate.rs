@@ -2,13 +2,10 @@
 
 use bevy_ecs::prelude::*;
 
-use super::forces::cloth_force_model;
-use crate::components::{
-    Cloth, ClothTopology, Particles, SolverWorkspace, Springs, Triangles, UserForces,
-};
+use super::forces::{ForceElements, ForceEnvironment};
+use crate::components::{Cloth, Particles, SolverWorkspace};
 use crate::resources::{
-    AirSettings, Gravity, HealthProblem, HealthReport, IntegratorStats, SimClock, SolverSettings,
-    StepSettings,
+    HealthProblem, HealthReport, IntegratorStats, SolverSettings, StepSettings,
 };
 use crate::schedule::{SimSchedules, SubstepSystems};
 use crate::solver::forces::ClothDynamics;
@@ -20,24 +17,12 @@ use crate::solver::integrate::step;
 pub fn integrate_cloths(
     settings: Res<StepSettings>,
     solver: Res<SolverSettings>,
-    gravity: Res<Gravity>,
-    air: Res<AirSettings>,
-    clock: Res<SimClock>,
+    environment: ForceEnvironment,
     mut stats: ResMut<IntegratorStats>,
     mut health: ResMut<HealthReport>,
-    mut cloths: Query<(
-        &Cloth,
-        &mut Particles,
-        &Springs,
-        &Triangles,
-        &ClothTopology,
-        &UserForces,
-        &mut SolverWorkspace,
-    )>,
+    mut cloths: Query<(&Cloth, &mut Particles, ForceElements, &mut SolverWorkspace)>,
 ) {
-    for (cloth, mut particles, springs, triangles, topology, user_forces, mut workspace) in
-        &mut cloths
-    {
+    for (cloth, mut particles, elements, mut workspace) in &mut cloths {
         let SolverWorkspace {
             integrator, forces, ..
         } = &mut *workspace;
@@ -46,24 +31,16 @@ pub fn integrate_cloths(
             .start_acceleration
             .iter_mut()
             .zip(&particles.force)
-            .zip(&topology.free_inv_mass)
+            .zip(&elements.2.free_inv_mass)
         {
             *a = *f * *w;
         }
         let mut x = std::mem::take(&mut particles.position);
         let mut v = std::mem::take(&mut particles.velocity);
-        let model = cloth_force_model(
-            &particles,
-            springs,
-            triangles,
-            topology,
-            user_forces,
-            &gravity,
-            &air,
-        );
+        let model = environment.model(&particles.inv_mass, elements);
         let mut dynamics = ClothDynamics {
             model,
-            free_inv_mass: &topology.free_inv_mass,
+            free_inv_mass: &elements.2.free_inv_mass,
             scratch: forces,
         };
         let result = step(
@@ -71,7 +48,7 @@ pub fn integrate_cloths(
             &mut dynamics,
             &mut x,
             &mut v,
-            clock.time_s as f32,
+            environment.time(),
             settings.dt,
             solver.tolerance,
             integrator,
