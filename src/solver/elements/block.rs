@@ -1,0 +1,152 @@
+//! Block-sparse matrices of 3×3 blocks, the shape of every derivative ∂f/∂x and ∂f/∂v of
+//! a cloth: one block row per particle, one block per pair of particles that share an
+//! element.
+
+use glam::{Mat3, Vec3};
+use rayon::prelude::*;
+
+use crate::solver::PARALLEL_MIN_LEN;
+
+/// Which blocks exist: for each particle (block row) the sorted particles (block columns)
+/// it shares an element with, itself included.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct BlockPattern {
+    /// Row `i` is `columns[offsets[i]..offsets[i + 1]]`.
+    pub offsets: Vec<u32>,
+    /// Block column indices, sorted within each row.
+    pub columns: Vec<u32>,
+}
+
+impl BlockPattern {
+    /// The pattern of `row_count` particles coupled by `stencils` (the particle lists of
+    /// elements: every pair within a stencil gets a block).
+    pub fn from_stencils<'a>(
+        row_count: usize,
+        stencils: impl IntoIterator<Item = &'a [u32]>,
+    ) -> Self {
+        let mut rows: Vec<Vec<u32>> = (0..row_count as u32).map(|i| vec![i]).collect();
+        for stencil in stencils {
+            for &i in stencil {
+                rows[i as usize].extend_from_slice(stencil);
+            }
+        }
+        let mut offsets = Vec::with_capacity(row_count + 1);
+        let mut columns = Vec::new();
+        offsets.push(0);
+        for mut row in rows {
+            row.sort_unstable();
+            row.dedup();
+            columns.extend_from_slice(&row);
+            offsets.push(columns.len() as u32);
+        }
+        Self { offsets, columns }
+    }
+
+    /// Number of block rows.
+    pub fn rows(&self) -> usize {
+        self.offsets.len().saturating_sub(1)
+    }
+
+    /// Index of block `(row, column)` in the block storage, if it exists.
+    pub fn slot(&self, row: u32, column: u32) -> Option<u32> {
+        let (start, end) = (
+            self.offsets[row as usize] as usize,
+            self.offsets[row as usize + 1] as usize,
+        );
+        self.columns[start..end]
+            .binary_search(&column)
+            .ok()
+            .map(|k| (start + k) as u32)
+    }
+
+    /// Slots of all `N × N` blocks of a stencil, row-major: where an element's local
+    /// blocks go. Panics if the stencil is not in the pattern.
+    pub fn stencil_slots<const N: usize>(&self, stencil: [u32; N]) -> [[u32; N]; N] {
+        stencil
+            .map(|i| stencil.map(|j| self.slot(i, j).expect("the stencil is part of the pattern")))
+    }
+}
+
+/// A matrix of 3×3 blocks over a [`BlockPattern`], stored in full (both triangles), so a
+/// product is a parallel gather over rows in a fixed order.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct BlockMatrix {
+    /// One block per pattern slot.
+    pub blocks: Vec<Mat3>,
+}
+
+impl BlockMatrix {
+    /// Zeroes the matrix and sizes it for `pattern`.
+    pub fn reset(&mut self, pattern: &BlockPattern) {
+        self.blocks.clear();
+        self.blocks.resize(pattern.columns.len(), Mat3::ZERO);
+    }
+
+    /// Adds an element's local blocks at their `slots`.
+    #[inline]
+    pub fn add_local<const N: usize>(&mut self, slots: &[[u32; N]; N], local: &[[Mat3; N]; N]) {
+        for a in 0..N {
+            for b in 0..N {
+                self.blocks[slots[a][b] as usize] += local[a][b];
+            }
+        }
+    }
+
+    /// Adds `diagonal[i] · I` to each diagonal block.
+    pub fn add_diagonal(&mut self, pattern: &BlockPattern, diagonal: impl Fn(usize) -> f32) {
+        for i in 0..pattern.rows() {
+            let slot = pattern
+                .slot(i as u32, i as u32)
+                .expect("every row has its diagonal");
+            self.blocks[slot as usize] += Mat3::from_diagonal(Vec3::splat(diagonal(i)));
+        }
+    }
+
+    /// `out = self · x`.
+    pub fn multiply(&self, pattern: &BlockPattern, x: &[Vec3], out: &mut [Vec3]) {
+        out.par_iter_mut()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .enumerate()
+            .for_each(|(i, out)| {
+                let (start, end) = (pattern.offsets[i] as usize, pattern.offsets[i + 1] as usize);
+                let mut sum = Vec3::ZERO;
+                for k in start..end {
+                    sum += self.blocks[k] * x[pattern.columns[k] as usize];
+                }
+                *out = sum;
+            });
+    }
+
+    /// The block `(row, column)`, zero where the pattern has none.
+    pub fn block(&self, pattern: &BlockPattern, row: u32, column: u32) -> Mat3 {
+        pattern
+            .slot(row, column)
+            .map_or(Mat3::ZERO, |s| self.blocks[s as usize])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_chain_of_two_springs_couples_neighbours_only() {
+        let pattern = BlockPattern::from_stencils(3, [&[0u32, 1][..], &[1, 2][..]]);
+        assert_eq!(pattern.offsets, vec![0, 2, 5, 7]);
+        assert_eq!(pattern.columns, vec![0, 1, 0, 1, 2, 1, 2]);
+        assert_eq!(pattern.slot(0, 2), None);
+        let mut m = BlockMatrix::default();
+        m.reset(&pattern);
+        m.add_diagonal(&pattern, |i| i as f32 + 1.0);
+        m.add_local(
+            &pattern.stencil_slots([1, 2]),
+            &[[Mat3::ZERO, Mat3::IDENTITY], [Mat3::IDENTITY, Mat3::ZERO]],
+        );
+        let mut out = vec![Vec3::ZERO; 3];
+        m.multiply(&pattern, &[Vec3::X, Vec3::Y, Vec3::Z], &mut out);
+        assert_eq!(
+            out,
+            vec![Vec3::X, 2.0 * Vec3::Y + Vec3::Z, 3.0 * Vec3::Z + Vec3::Y]
+        );
+    }
+}

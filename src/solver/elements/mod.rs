@@ -1,0 +1,18 @@
+//! The element library: every interaction as an element that gives its energy, its
+//! forces and its 3×3 derivative blocks ∂f/∂x and ∂f/∂v, so that explicit, implicit and
+//! block-descent solvers share one implementation. Each element is tested against finite
+//! differences of its own energy and forces.
+
+pub mod block;
+pub mod dual;
+pub mod hinge;
+pub mod membrane;
+pub mod spring;
+
+#[cfg(test)]
+pub(crate) mod testing;
+
+pub use block::{BlockMatrix, BlockPattern};
+pub use hinge::{BendingLaw, HingeElement};
+pub use membrane::{MembraneElement, MembraneMaterial};
+pub use spring::SpringElement;
