@@ -8,10 +8,10 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use glam::{Affine3A, Vec3};
 use selvedge::Simulation;
 use selvedge::builders::grid::build_grid;
-use selvedge::components::{ClothMaterial, ClothTopology, Csr, SpringCoefficients};
+use selvedge::components::{ClothMaterial, ClothTopology, SpringCoefficients};
 use selvedge::scene::parse_scene;
 use selvedge::solver::forces::{Air, ClothDynamics, ForceModel, ForceScratch};
-use selvedge::solver::integrate::{Integrator, IntegratorWorkspace, step};
+use selvedge::solver::integrate::{Integrator, IntegratorWorkspace, MethodSettings, step};
 
 const SIZES: [u32; 2] = [64, 256];
 
@@ -44,39 +44,41 @@ fn whole_step(c: &mut Criterion) {
 }
 
 fn kernels(c: &mut Criterion) {
-    let coefficients = SpringCoefficients {
-        stiffness: 100.0,
-        damping: 0.01,
-    };
+    let coefficients = SpringCoefficients { stiffness: 100.0, damping: 0.01 };
+    let springs = Some(coefficients);
     let material = ClothMaterial {
         density: 0.2,
-        stretch: coefficients,
-        shear: coefficients,
-        bend: coefficients,
+        stretch: springs,
+        shear: springs,
+        bend: springs,
+        membrane: None,
+        bending: None,
+        grain_deg: 0.0,
     };
     let mut group = c.benchmark_group("kernels");
     group.sample_size(20);
     for n in SIZES {
         let cloth = build_grid((1.0, 1.0), (n, n), Affine3A::IDENTITY, &material);
         let count = cloth.particles.len();
-        let topology = ClothTopology {
-            particle_springs: Csr::from_items(count, &cloth.springs.pairs),
-            particle_triangles: Csr::from_items(count, &cloth.triangles.indices),
-            free_inv_mass: cloth.particles.inv_mass.clone(),
-            builds: 1,
-        };
+        let topology = ClothTopology::build(
+            &cloth.particles.inv_mass,
+            &cloth.springs,
+            &cloth.triangles,
+            &cloth.hinges,
+            &cloth.membranes,
+            &[],
+            1,
+        );
         let model = ForceModel {
             inv_mass: &cloth.particles.inv_mass,
+            density: material.density,
             springs: &cloth.springs,
             triangles: &cloth.triangles.indices,
+            hinges: &cloth.hinges,
+            membranes: &cloth.membranes,
             topology: &topology,
             gravity: Vec3::new(0.0, -9.81, 0.0),
-            air: Air {
-                drag: 1.0,
-                wind: Vec3::X,
-                wind_drag: 0.6,
-                gust: None,
-            },
+            air: Air { drag: 1.0, wind: Vec3::X, wind_drag: 0.6, gust: None, area_damping: 0.0 },
             user_forces: &[],
         };
         let mut scratch = ForceScratch::default();
@@ -85,33 +87,17 @@ fn kernels(c: &mut Criterion) {
         group.bench_function(BenchmarkId::new("forces", format!("{n}x{n}")), |b| {
             b.iter(|| model.eval(black_box(&x), &v, 0.0, &mut scratch, &mut force));
         });
-        for method in [Integrator::SymplecticEuler, Integrator::Rk4] {
-            let mut dynamics = ClothDynamics {
-                model,
-                free_inv_mass: &topology.free_inv_mass,
-                scratch: &mut scratch,
-            };
+        let settings = MethodSettings::default();
+        for method in [Integrator::SymplecticEuler, Integrator::Rk4, Integrator::ImplicitEuler] {
+            let mut dynamics = ClothDynamics { model, free_inv_mass: &topology.free_inv_mass, scratch: &mut scratch };
             let mut ws = IntegratorWorkspace::default();
             ws.resize(count);
             let (mut x, mut v) = (x.clone(), v.clone());
-            group.bench_function(
-                BenchmarkId::new(format!("integrate/{}", method.name()), format!("{n}x{n}")),
-                |b| {
-                    b.iter(|| {
-                        step(
-                            method,
-                            &mut dynamics,
-                            &mut x,
-                            &mut v,
-                            0.0,
-                            1e-5,
-                            1e-4,
-                            &mut ws,
-                        )
-                        .expect("fixed step")
-                    });
-                },
-            );
+            group.bench_function(BenchmarkId::new(format!("integrate/{}", method.name()), format!("{n}x{n}")), |b| {
+                b.iter(|| {
+                    step(method, &mut dynamics, &mut x, &mut v, 0.0, 1e-5, &settings, &mut ws).expect("fixed step")
+                });
+            });
         }
     }
     group.finish();

@@ -10,7 +10,7 @@ use crate::builders::pins::PinSelection;
 use crate::builders::tear::Cut;
 use crate::solver::contact::GroundPlane;
 use crate::solver::forces::Air;
-use crate::solver::integrate::Integrator;
+use crate::solver::integrate::{Integrator, MethodSettings};
 
 /// How time advances: a frame is `substeps` steps of `dt`.
 #[derive(Resource, Debug, Clone, Copy, PartialEq)]
@@ -29,13 +29,13 @@ pub struct Gravity(pub Vec3);
 #[derive(Resource, Debug, Clone, Copy, PartialEq, Default)]
 pub struct AirSettings(pub Air);
 
-/// The integrator every cloth uses, and its error tolerance when adaptive.
+/// The integrator every cloth uses, and its settings.
 #[derive(Resource, Debug, Clone, Copy, PartialEq)]
 pub struct SolverSettings {
     /// Integration method.
     pub integrator: Integrator,
-    /// Relative error tolerance of [`Integrator::Rk45`] [-].
-    pub tolerance: f32,
+    /// Tolerances, θ, Rayleigh damping, solver limits.
+    pub method: MethodSettings,
 }
 
 /// The ground plane, when the scene has one.
@@ -105,6 +105,8 @@ pub struct IntegratorStats {
     pub rejected: u64,
     /// Evaluations of the force model, start-of-step ones included.
     pub evaluations: u64,
+    /// Conjugate-gradient iterations of the implicit methods.
+    pub iterations: u64,
 }
 
 /// A change to a cloth's structure at a given time.

@@ -87,10 +87,7 @@ fn strict_schedule(label: impl ScheduleLabel) -> Schedule {
     let mut schedule = Schedule::new(label);
     schedule
         .set_executor(SingleThreadedExecutor::new())
-        .set_build_settings(ScheduleBuildSettings {
-            ambiguity_detection: LogLevel::Error,
-            ..Default::default()
-        });
+        .set_build_settings(ScheduleBuildSettings { ambiguity_detection: LogLevel::Error, ..Default::default() });
     schedule
 }
 
@@ -128,11 +125,7 @@ pub fn build_schedules() -> SimSchedules {
 
 /// Builds the schedules and adds them to `world`.
 pub fn add_schedules(world: &mut World) {
-    let SimSchedules {
-        frame,
-        substep,
-        render,
-    } = build_schedules();
+    let SimSchedules { frame, substep, render } = build_schedules();
     world.add_schedule(frame);
     world.add_schedule(substep);
     world.add_schedule(render);

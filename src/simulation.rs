@@ -109,18 +109,12 @@ impl Simulation {
 
     /// The entity of the cloth named `name`.
     pub fn cloth_entity(&mut self, name: &str) -> Option<Entity> {
-        self.world
-            .query::<(Entity, &Cloth)>()
-            .iter(&self.world)
-            .find(|(_, c)| c.name == name)
-            .map(|(e, _)| e)
+        self.world.query::<(Entity, &Cloth)>().iter(&self.world).find(|(_, c)| c.name == name).map(|(e, _)| e)
     }
 
     /// The surfaces of all cloths as of the last completed frame, in spawn order.
     pub fn surfaces(&mut self) -> Vec<ClothSurface<'_>> {
-        let mut query = self
-            .world
-            .query::<(&Cloth, &Particles, &RenderMesh, &Triangles)>();
+        let mut query = self.world.query::<(&Cloth, &Particles, &RenderMesh, &Triangles)>();
         query
             .iter(&self.world)
             .map(|(cloth, particles, mesh, triangles)| ClothSurface {

@@ -10,16 +10,12 @@ use crate::solver::pins::hold_pins;
 /// [`SubstepSystems::Constraints`].
 pub fn hold_pinned_particles(mut cloths: Query<(&mut Particles, &Pins)>) {
     for (mut particles, pins) in &mut cloths {
-        let Particles {
-            position, velocity, ..
-        } = &mut *particles;
+        let Particles { position, velocity, .. } = &mut *particles;
         hold_pins(&pins.particles, &pins.targets, position, velocity);
     }
 }
 
 /// Adds this module's systems.
 pub fn add_to(schedules: &mut SimSchedules) {
-    schedules
-        .substep
-        .add_systems(hold_pinned_particles.in_set(SubstepSystems::Constraints));
+    schedules.substep.add_systems(hold_pinned_particles.in_set(SubstepSystems::Constraints));
 }

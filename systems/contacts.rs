@@ -12,16 +12,12 @@ use crate::solver::contact::resolve_ground;
 pub fn collide_with_ground(ground: Res<Ground>, mut cloths: Query<&mut Particles>) {
     let Some(plane) = ground.0 else { return };
     for mut particles in &mut cloths {
-        let Particles {
-            position, velocity, ..
-        } = &mut *particles;
+        let Particles { position, velocity, .. } = &mut *particles;
         resolve_ground(plane, position, velocity);
     }
 }
 
 /// Adds this module's systems.
 pub fn add_to(schedules: &mut SimSchedules) {
-    schedules
-        .substep
-        .add_systems(collide_with_ground.in_set(SubstepSystems::BodyContacts));
+    schedules.substep.add_systems(collide_with_ground.in_set(SubstepSystems::BodyContacts));
 }

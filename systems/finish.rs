@@ -4,7 +4,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 
 use super::forces::{ForceElements, ForceEnvironment};
-use crate::components::{Cloth, Particles, Pins, SolverWorkspace, Springs};
+use crate::components::{Cloth, MembraneTriangles, Particles, Pins, SolverWorkspace, Springs};
 use crate::resources::{DivergenceLimit, HealthProblem, HealthReport, Probes, SimClock};
 use crate::schedule::{FrameSystems, SimSchedules};
 use crate::solver::health::check_health;
@@ -16,29 +16,29 @@ use crate::solver::probes::{kinetic_energy, max_strain};
 pub fn check_cloth_health(
     limit: Res<DivergenceLimit>,
     mut health: ResMut<HealthReport>,
-    cloths: Query<(&Cloth, &Particles, &Springs)>,
+    cloths: Query<(&Cloth, &Particles, &Springs, &MembraneTriangles)>,
 ) {
     if health.problem.is_some() {
         return;
     }
-    for (cloth, particles, springs) in &cloths {
+    for (cloth, particles, springs, membranes) in &cloths {
         if let Err(problem) = check_health(
             &particles.position,
             &particles.velocity,
+            &particles.rest_position,
             springs,
+            membranes,
             limit.max_strain,
         ) {
-            health.problem = Some(HealthProblem {
-                cloth: cloth.name.clone(),
-                problem: problem.to_string(),
-            });
+            health.problem = Some(HealthProblem { cloth: cloth.name.clone(), problem: problem.to_string() });
             return;
         }
     }
 }
 
 /// Measures the frame's probes over all cloths: `kinetic_energy_j`, `potential_energy_j`
-/// (gravity about y = 0 plus spring energy), `max_strain` and `pin_force_n` (magnitude of
+/// (gravity about y = 0 plus elastic energy), `max_strain` (largest edge strain, springs
+/// and membrane triangle sides) and `pin_force_n` (magnitude of
 /// the total force the pins carry, from the forces at the frame's final state).
 /// Runs in [`FrameSystems::Finish`].
 pub fn measure_probes(
@@ -46,23 +46,16 @@ pub fn measure_probes(
     mut probes: ResMut<Probes>,
     mut cloths: Query<(&Particles, ForceElements, &Pins, &mut SolverWorkspace)>,
 ) {
-    let (mut kinetic, mut potential, mut strain, mut pin_force) =
-        (0.0, 0.0, f32::NEG_INFINITY, Vec3::ZERO);
+    let (mut kinetic, mut potential, mut strain, mut pin_force) = (0.0, 0.0, f32::NEG_INFINITY, Vec3::ZERO);
     for (particles, elements, pins, mut workspace) in &mut cloths {
         let model = environment.model(&particles.inv_mass, elements);
         kinetic += kinetic_energy(&particles.velocity, &particles.inv_mass);
         potential += model.potential_energy(&particles.position);
-        strain = strain.max(max_strain(&particles.position, model.springs));
+        strain = strain.max(max_strain(&particles.position, &particles.rest_position, model.springs, model.membranes));
         if !pins.is_empty() {
             let SolverWorkspace { forces, force, .. } = &mut *workspace;
             force.resize(particles.len(), Vec3::ZERO);
-            model.eval(
-                &particles.position,
-                &particles.velocity,
-                environment.time(),
-                forces,
-                force,
-            );
+            model.eval(&particles.position, &particles.velocity, environment.time(), forces, force);
             pin_force += pin_reaction(&pins.particles, force);
         }
     }
@@ -79,9 +72,5 @@ pub fn count_frame(mut clock: ResMut<SimClock>) {
 
 /// Adds this module's systems.
 pub fn add_to(schedules: &mut SimSchedules) {
-    schedules.frame.add_systems(
-        (check_cloth_health, measure_probes, count_frame)
-            .chain()
-            .in_set(FrameSystems::Finish),
-    );
+    schedules.frame.add_systems((check_cloth_health, measure_probes, count_frame).chain().in_set(FrameSystems::Finish));
 }

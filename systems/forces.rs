@@ -4,7 +4,8 @@ use bevy_ecs::prelude::*;
 use bevy_ecs::system::SystemParam;
 
 use crate::components::{
-    ClothTopology, Particles, SolverWorkspace, Springs, Triangles, UserForces,
+    BendingHinges, ClothMaterial, ClothTopology, MembraneTriangles, Particles, SolverWorkspace, Springs, Triangles,
+    UserForces,
 };
 use crate::resources::{AirSettings, Gravity, SimClock};
 use crate::schedule::{SimSchedules, SubstepSystems};
@@ -12,16 +13,22 @@ use crate::solver::forces::ForceModel;
 
 /// The components of a cloth that exert force besides its particles, to query together.
 pub type ForceElements = (
+    &'static ClothMaterial,
     &'static Springs,
     &'static Triangles,
+    &'static BendingHinges,
+    &'static MembraneTriangles,
     &'static ClothTopology,
     &'static UserForces,
 );
 
 /// What a [`ForceElements`] query yields for one cloth.
 pub type ForceElementsItem<'a> = (
+    &'a ClothMaterial,
     &'a Springs,
     &'a Triangles,
+    &'a BendingHinges,
+    &'a MembraneTriangles,
     &'a ClothTopology,
     &'a UserForces,
 );
@@ -36,16 +43,15 @@ pub struct ForceEnvironment<'w> {
 
 impl ForceEnvironment<'_> {
     /// The force model of a cloth with inverse masses `inv_mass` [1/kg] and `elements`.
-    pub fn model<'a>(
-        &self,
-        inv_mass: &'a [f32],
-        elements: ForceElementsItem<'a>,
-    ) -> ForceModel<'a> {
-        let (springs, triangles, topology, user_forces) = elements;
+    pub fn model<'a>(&self, inv_mass: &'a [f32], elements: ForceElementsItem<'a>) -> ForceModel<'a> {
+        let (material, springs, triangles, hinges, membranes, topology, user_forces) = elements;
         ForceModel {
             inv_mass,
+            density: material.density,
             springs,
             triangles: &triangles.indices,
+            hinges,
+            membranes,
             topology,
             gravity: self.gravity.0,
             air: self.air.0,
@@ -68,20 +74,12 @@ pub fn accumulate_forces(
     for (mut particles, elements, mut workspace) in &mut cloths {
         let mut force = std::mem::take(&mut particles.force);
         let model = environment.model(&particles.inv_mass, elements);
-        model.eval(
-            &particles.position,
-            &particles.velocity,
-            environment.time(),
-            &mut workspace.forces,
-            &mut force,
-        );
+        model.eval(&particles.position, &particles.velocity, environment.time(), &mut workspace.forces, &mut force);
         particles.force = force;
     }
 }
 
 /// Adds this module's systems.
 pub fn add_to(schedules: &mut SimSchedules) {
-    schedules
-        .substep
-        .add_systems(accumulate_forces.in_set(SubstepSystems::Forces));
+    schedules.substep.add_systems(accumulate_forces.in_set(SubstepSystems::Forces));
 }

@@ -3,7 +3,7 @@
 use bevy_ecs::prelude::*;
 
 use crate::builders::tear::tear;
-use crate::components::{Cloth, Particles, Pins, Springs, Triangles};
+use crate::components::{BendingHinges, Cloth, MembraneTriangles, Particles, Pins, Springs, Triangles};
 use crate::resources::{EditAction, ScheduledEdits, SimClock, StepSettings};
 use crate::schedule::{FrameSystems, SimSchedules};
 
@@ -16,7 +16,15 @@ pub fn apply_scheduled_edits(
     clock: Res<SimClock>,
     settings: Res<StepSettings>,
     mut edits: ResMut<ScheduledEdits>,
-    mut cloths: Query<(&Cloth, &Particles, &mut Springs, &mut Triangles, &mut Pins)>,
+    mut cloths: Query<(
+        &Cloth,
+        &Particles,
+        &mut Springs,
+        &mut Triangles,
+        &mut BendingHinges,
+        &mut MembraneTriangles,
+        &mut Pins,
+    )>,
 ) {
     let now = clock.time_s + 0.5 * f64::from(settings.dt);
     let due = edits.pending.iter().take_while(|e| e.at_s <= now).count();
@@ -24,29 +32,26 @@ pub fn apply_scheduled_edits(
         return;
     }
     for edit in edits.pending.drain(..due) {
-        let Some((cloth, particles, mut springs, mut triangles, mut pins)) = cloths
-            .iter_mut()
-            .find(|(cloth, ..)| cloth.name == edit.cloth)
+        let Some((cloth, particles, mut springs, mut triangles, mut hinges, mut membranes, mut pins)) =
+            cloths.iter_mut().find(|(cloth, ..)| cloth.name == edit.cloth)
         else {
             continue;
         };
         match &edit.action {
             EditAction::Tear(cut) => {
-                tear(cut, &particles.position, &mut springs, &mut triangles);
+                tear(cut, &particles.position, &mut springs, &mut triangles, &mut hinges, &mut membranes);
             }
             EditAction::Pin(selections) => {
-                for particle in selections.iter().flat_map(|s| {
-                    s.resolve(&particles.position, cloth.grid)
-                        .unwrap_or_default()
-                }) {
+                for particle in
+                    selections.iter().flat_map(|s| s.resolve(&particles.position, cloth.grid).unwrap_or_default())
+                {
                     pins.insert(particle, particles.position[particle as usize]);
                 }
             }
             EditAction::Unpin(selections) => {
-                for particle in selections.iter().flat_map(|s| {
-                    s.resolve(&particles.position, cloth.grid)
-                        .unwrap_or_default()
-                }) {
+                for particle in
+                    selections.iter().flat_map(|s| s.resolve(&particles.position, cloth.grid).unwrap_or_default())
+                {
                     pins.remove(particle);
                 }
             }
@@ -56,7 +61,5 @@ pub fn apply_scheduled_edits(
 
 /// Adds this module's systems.
 pub fn add_to(schedules: &mut SimSchedules) {
-    schedules
-        .frame
-        .add_systems(apply_scheduled_edits.in_set(FrameSystems::Input));
+    schedules.frame.add_systems(apply_scheduled_edits.in_set(FrameSystems::Input));
 }

@@ -4,9 +4,7 @@ use bevy_ecs::prelude::*;
 
 use super::forces::{ForceElements, ForceEnvironment};
 use crate::components::{Cloth, Particles, SolverWorkspace};
-use crate::resources::{
-    HealthProblem, HealthReport, IntegratorStats, SolverSettings, StepSettings,
-};
+use crate::resources::{HealthProblem, HealthReport, IntegratorStats, SolverSettings, StepSettings};
 use crate::schedule::{SimSchedules, SubstepSystems};
 use crate::solver::forces::ClothDynamics;
 use crate::solver::integrate::step;
@@ -23,26 +21,16 @@ pub fn integrate_cloths(
     mut cloths: Query<(&Cloth, &mut Particles, ForceElements, &mut SolverWorkspace)>,
 ) {
     for (cloth, mut particles, elements, mut workspace) in &mut cloths {
-        let SolverWorkspace {
-            integrator, forces, ..
-        } = &mut *workspace;
+        let SolverWorkspace { integrator, forces, .. } = &mut *workspace;
         integrator.resize(particles.len());
-        for ((a, f), w) in integrator
-            .start_acceleration
-            .iter_mut()
-            .zip(&particles.force)
-            .zip(&elements.2.free_inv_mass)
+        for ((a, f), w) in integrator.start_acceleration.iter_mut().zip(&particles.force).zip(&elements.5.free_inv_mass)
         {
             *a = *f * *w;
         }
         let mut x = std::mem::take(&mut particles.position);
         let mut v = std::mem::take(&mut particles.velocity);
         let model = environment.model(&particles.inv_mass, elements);
-        let mut dynamics = ClothDynamics {
-            model,
-            free_inv_mass: &elements.2.free_inv_mass,
-            scratch: forces,
-        };
+        let mut dynamics = ClothDynamics { model, free_inv_mass: &elements.5.free_inv_mass, scratch: forces };
         let result = step(
             solver.integrator,
             &mut dynamics,
@@ -50,7 +38,7 @@ pub fn integrate_cloths(
             &mut v,
             environment.time(),
             settings.dt,
-            solver.tolerance,
+            &solver.method,
             integrator,
         );
         particles.position = x;
@@ -60,12 +48,10 @@ pub fn integrate_cloths(
                 stats.accepted += u64::from(report.accepted);
                 stats.rejected += u64::from(report.rejected);
                 stats.evaluations += 1 + u64::from(report.evaluations);
+                stats.iterations += u64::from(report.iterations);
             }
             Err(error) => {
-                health.problem.get_or_insert(HealthProblem {
-                    cloth: cloth.name.clone(),
-                    problem: error.to_string(),
-                });
+                health.problem.get_or_insert(HealthProblem { cloth: cloth.name.clone(), problem: error.to_string() });
             }
         }
     }
@@ -73,7 +59,5 @@ pub fn integrate_cloths(
 
 /// Adds this module's systems.
 pub fn add_to(schedules: &mut SimSchedules) {
-    schedules
-        .substep
-        .add_systems(integrate_cloths.in_set(SubstepSystems::Integrate));
+    schedules.substep.add_systems(integrate_cloths.in_set(SubstepSystems::Integrate));
 }

@@ -22,7 +22,5 @@ pub fn run_substeps(world: &mut World) {
 
 /// Adds this module's systems.
 pub fn add_to(schedules: &mut SimSchedules) {
-    schedules
-        .frame
-        .add_systems(run_substeps.in_set(FrameSystems::Substeps));
+    schedules.frame.add_systems(run_substeps.in_set(FrameSystems::Substeps));
 }

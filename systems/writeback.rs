@@ -15,7 +15,5 @@ pub fn update_render_normals(mut cloths: Query<(&Particles, &Triangles, &mut Ren
 
 /// Adds this module's systems.
 pub fn add_to(schedules: &mut SimSchedules) {
-    schedules
-        .render
-        .add_systems(update_render_normals.in_set(RenderSystems::Writeback));
+    schedules.render.add_systems(update_render_normals.in_set(RenderSystems::Writeback));
 }

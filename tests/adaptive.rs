@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::oscillator::{Oscillator, exact_state, natural_frequency};
+use common::oscillator::{ParticleSystem, exact_state, natural_frequency, with_tolerance};
 use selvedge::solver::integrate::Integrator;
 
 fn state_error((x, v): (f64, f64)) -> f64 {
@@ -14,29 +14,20 @@ fn state_error((x, v): (f64, f64)) -> f64 {
 
 #[test]
 fn rk45_meets_its_tolerance_with_fewer_steps_than_rk4() {
-    let oscillator = Oscillator::new();
+    let oscillator = ParticleSystem::oscillator();
     // Outer steps of 0.5 s: RK45 chooses its own steps inside them.
     let tolerance = 1e-4;
-    let (state, report) = oscillator.run(Integrator::Rk45, 0.5, 1.0, tolerance);
+    let (state, report) = oscillator.oscillator_state(Integrator::Rk45, 0.5, 1.0, &with_tolerance(tolerance));
     let rk45_error = state_error(state);
-    assert!(
-        report.max_error_ratio <= 1.0,
-        "accepted an error estimate above tolerance: {report:?}"
-    );
+    assert!(report.max_error_ratio <= 1.0, "accepted an error estimate above tolerance: {report:?}");
     // Local control at 1e-4 of the ~1 m state gives a global error of that order.
-    assert!(
-        rk45_error < 10.0 * f64::from(tolerance),
-        "global error {rk45_error:e} at tolerance {tolerance:e}"
-    );
+    assert!(rk45_error < 10.0 * f64::from(tolerance), "global error {rk45_error:e} at tolerance {tolerance:e}");
 
     // The fewest fixed RK4 steps that are as accurate.
     let rk4_steps = (1u32..=1000)
         .find(|&n| {
-            state_error(
-                oscillator
-                    .run(Integrator::Rk4, 1.0 / f64::from(n), 1.0, 0.0)
-                    .0,
-            ) <= rk45_error
+            state_error(oscillator.oscillator_state(Integrator::Rk4, 1.0 / f64::from(n), 1.0, &with_tolerance(0.0)).0)
+                <= rk45_error
         })
         .expect("RK4 reaches the accuracy within 1000 steps");
     assert!(
@@ -50,12 +41,9 @@ fn rk45_meets_its_tolerance_with_fewer_steps_than_rk4() {
 
 #[test]
 fn a_tighter_tolerance_gives_a_smaller_error() {
-    let oscillator = Oscillator::new();
-    let loose = state_error(oscillator.run(Integrator::Rk45, 0.5, 1.0, 1e-3).0);
-    let tight = state_error(oscillator.run(Integrator::Rk45, 0.5, 1.0, 1e-5).0);
+    let oscillator = ParticleSystem::oscillator();
+    let loose = state_error(oscillator.oscillator_state(Integrator::Rk45, 0.5, 1.0, &with_tolerance(1e-3)).0);
+    let tight = state_error(oscillator.oscillator_state(Integrator::Rk45, 0.5, 1.0, &with_tolerance(1e-5)).0);
     eprintln!("tolerance 1e-3: {loose:e}, 1e-5: {tight:e}");
-    assert!(
-        tight < loose / 10.0,
-        "tolerance 1e-3 gave {loose:e}, 1e-5 gave {tight:e}"
-    );
+    assert!(tight < loose / 10.0, "tolerance 1e-3 gave {loose:e}, 1e-5 gave {tight:e}");
 }

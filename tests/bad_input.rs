@@ -24,9 +24,8 @@ fn error(from: &str, to: &str) -> String {
     assert!(GOOD.contains(from), "test bug: {from} is not in the scene");
     let text = GOOD.replacen(from, to, 1);
     let path = Path::new("scenes/broken.ron");
-    let result: Result<Simulation, SceneError> = parse_scene(&text, path).and_then(|scene| {
-        Simulation::new(&scene, Path::new("scenes")).map_err(|e| e.located(path, &text))
-    });
+    let result: Result<Simulation, SceneError> = parse_scene(&text, path)
+        .and_then(|scene| Simulation::new(&scene, Path::new("scenes")).map_err(|e| e.located(path, &text)));
     match result {
         Ok(_) => panic!("{to} was accepted"),
         Err(e) => e.to_string(),
@@ -35,10 +34,7 @@ fn error(from: &str, to: &str) -> String {
 
 fn assert_mentions(message: &str, parts: &[&str]) {
     for part in parts {
-        assert!(
-            message.contains(part),
-            "`{message}` does not mention `{part}`"
-        );
+        assert!(message.contains(part), "`{message}` does not mention `{part}`");
     }
 }
 
@@ -50,10 +46,7 @@ fn the_good_scene_is_good() {
 
 #[test]
 fn a_syntax_error_names_file_line_and_column() {
-    let message = error(
-        "time: (fps: 60, frames: 10),",
-        "time: (fps: 60 frames: 10),",
-    );
+    let message = error("time: (fps: 60, frames: 10),", "time: (fps: 60 frames: 10),");
     assert_mentions(&message, &["scenes/broken.ron:4:"]);
 }
 
@@ -66,50 +59,27 @@ fn an_unknown_field_is_an_error_at_its_place() {
 #[test]
 fn an_unknown_integrator_is_named_with_the_known_ones() {
     let message = error("integrator: SymplecticEuler", "integrator: Leapfrog");
-    assert_mentions(
-        &message,
-        &["scenes/broken.ron:3:", "Leapfrog", "VelocityVerlet"],
-    );
+    assert_mentions(&message, &["scenes/broken.ron:3:", "Leapfrog", "VelocityVerlet"]);
 }
 
 #[test]
 fn negative_and_zero_mass_name_the_density_field() {
     for density in ["-0.2", "0.0"] {
         let message = error("density: 0.2", &format!("density: {density}"));
-        assert_mentions(
-            &message,
-            &[
-                "scenes/broken.ron:9:24",
-                "cloths[0].material.density",
-                "mass",
-            ],
-        );
+        assert_mentions(&message, &["scenes/broken.ron:9:24", "cloths[0].material.density", "mass"]);
     }
 }
 
 #[test]
 fn nan_is_refused() {
     let message = error("stiffness: 100.0", "stiffness: NaN");
-    assert_mentions(
-        &message,
-        &[
-            "cloths[0].material.stretch.stiffness",
-            "not a finite number",
-        ],
-    );
+    assert_mentions(&message, &["cloths[0].material.stretch.stiffness", "not a finite number"]);
 }
 
 #[test]
 fn a_zero_size_cloth_is_refused() {
     let message = error("size: (1.0, 1.0)", "size: (0.0, 1.0)");
-    assert_mentions(
-        &message,
-        &[
-            "scenes/broken.ron:8:",
-            "cloths[0].shape.size",
-            "greater than 0",
-        ],
-    );
+    assert_mentions(&message, &["scenes/broken.ron:8:", "cloths[0].shape.size", "greater than 0"]);
 }
 
 #[test]
@@ -117,52 +87,25 @@ fn a_pin_index_out_of_range_names_the_pin_and_the_range() {
     let message = error("Indices([0, 7])", "Indices([0, 64])");
     assert_mentions(
         &message,
-        &[
-            "scenes/broken.ron:10:20",
-            "cloths[0].pins[0]",
-            "particle 64 does not exist",
-            "0 to 63",
-        ],
+        &["scenes/broken.ron:10:20", "cloths[0].pins[0]", "particle 64 does not exist", "0 to 63"],
     );
 }
 
 #[test]
 fn a_missing_mesh_file_names_the_field_and_the_file() {
-    let message = error(
-        "Grid(size: (1.0, 1.0), resolution: (8, 8))",
-        "Mesh(path: \"meshes/nowhere.obj\")",
-    );
-    assert_mentions(
-        &message,
-        &[
-            "scenes/broken.ron:8:",
-            "cloths[0].shape.path",
-            "nowhere.obj",
-        ],
-    );
+    let message = error("Grid(size: (1.0, 1.0), resolution: (8, 8))", "Mesh(path: \"meshes/nowhere.obj\")");
+    assert_mentions(&message, &["scenes/broken.ron:8:", "cloths[0].shape.path", "nowhere.obj"]);
 }
 
 #[test]
 fn a_step_that_does_not_divide_the_frame_is_refused_with_a_suggestion() {
     let message = error("substeps: 10", "dt: 0.007");
-    assert_mentions(
-        &message,
-        &["solver.dt", "does not divide the frame time", "0.0083"],
-    );
+    assert_mentions(&message, &["solver.dt", "does not divide the frame time", "0.0083"]);
 }
 
 #[test]
 fn an_edit_of_an_unknown_cloth_is_refused() {
-    let message = error(
-        "    ],\n)",
-        "    ],\n    edits: [(at_s: 1.0, cloth: \"shet\", action: Unpin([Indices([0])]))],\n)",
-    );
-    assert_mentions(
-        &message,
-        &[
-            "scenes/broken.ron:13:25",
-            "edits[0].cloth",
-            "no cloth is named `shet`",
-        ],
-    );
+    let message =
+        error("    ],\n)", "    ],\n    edits: [(at_s: 1.0, cloth: \"shet\", action: Unpin([Indices([0])]))],\n)");
+    assert_mentions(&message, &["scenes/broken.ron:13:25", "edits[0].cloth", "no cloth is named `shet`"]);
 }

@@ -23,16 +23,15 @@ fn run_writes_frames_summary_and_probes() {
     let output = selvedge(&["run", "scenes/free_fall.ron", "--out", out, "--frames", "3"]);
     assert!(output.status.success(), "{}", text(&output.stderr));
     for frame in 0..=3 {
-        let obj = std::fs::read_to_string(dir.path().join(format!("frames/frame_{frame:04}.obj")))
-            .expect("frame written");
+        let obj =
+            std::fs::read_to_string(dir.path().join(format!("frames/frame_{frame:04}.obj"))).expect("frame written");
         assert_eq!(obj.lines().filter(|l| l.starts_with("v ")).count(), 256);
         assert_eq!(obj.lines().filter(|l| l.starts_with("vn ")).count(), 256);
         assert_eq!(obj.lines().filter(|l| l.starts_with("f ")).count(), 450);
     }
-    let summary: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(dir.path().join("summary.json")).expect("summary"),
-    )
-    .expect("json");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("summary.json")).expect("summary"))
+            .expect("json");
     assert_eq!(summary["scene"], "free_fall");
     assert_eq!(summary["integrator"], "VelocityVerlet");
     assert_eq!(summary["frames"], 3);
@@ -42,41 +41,22 @@ fn run_writes_frames_summary_and_probes() {
     for field in ["wall_time_s", "ms_per_frame", "springs", "triangles"] {
         assert!(summary[field].is_number(), "summary lacks {field}");
     }
-    for probe in [
-        "kinetic_energy_j",
-        "potential_energy_j",
-        "max_strain",
-        "pin_force_n",
-    ] {
-        assert!(
-            summary["probes"][probe].is_number(),
-            "summary lacks probe {probe}"
-        );
+    for probe in ["kinetic_energy_j", "potential_energy_j", "max_strain", "pin_force_n"] {
+        assert!(summary["probes"][probe].is_number(), "summary lacks probe {probe}");
     }
     // Kinetic energy after 0.05 s of free fall: ½ M (g t)².
-    let kinetic = summary["probes"]["kinetic_energy_j"]
-        .as_f64()
-        .expect("number");
+    let kinetic = summary["probes"]["kinetic_energy_j"].as_f64().expect("number");
     let expected = 0.5 * 0.2 * (9.81f64 * 0.05).powi(2);
-    assert!(
-        (kinetic - expected).abs() < 1e-3 * expected,
-        "kinetic energy {kinetic}, expected {expected}"
-    );
+    assert!((kinetic - expected).abs() < 1e-3 * expected, "kinetic energy {kinetic}, expected {expected}");
     let csv = std::fs::read_to_string(dir.path().join("probes.csv")).expect("probes.csv");
     let lines: Vec<&str> = csv.lines().collect();
-    assert_eq!(
-        lines[0],
-        "frame,time_s,kinetic_energy_j,max_strain,pin_force_n,potential_energy_j"
-    );
+    assert_eq!(lines[0], "frame,time_s,kinetic_energy_j,max_strain,pin_force_n,potential_energy_j");
     assert_eq!(lines.len(), 4);
     assert!(lines[3].starts_with("3,0.05"));
     // Not a terminal: progress comes as plain lines, then the summary.
     assert!(text(&output.stderr).contains("frame 3/3"));
     assert!(text(&output.stdout).contains("free_fall: 3 frames"));
-    let leftovers: Vec<_> = walk(dir.path())
-        .into_iter()
-        .filter(|p| p.to_string_lossy().contains(".partial"))
-        .collect();
+    let leftovers: Vec<_> = walk(dir.path()).into_iter().filter(|p| p.to_string_lossy().contains(".partial")).collect();
     assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
 }
 
@@ -85,8 +65,7 @@ fn quiet_prints_nothing_and_ply_frames_are_binary_meshes() {
     let dir = tempfile::tempdir().expect("temp dir");
     let scene = dir.path().join("ply.ron");
     let original =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/free_fall.ron"))
-            .expect("scene");
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/free_fall.ron")).expect("scene");
     let with_ply = original.replace(
         "time: (fps: 60, duration_s: 1.0),",
         "time: (fps: 60, duration_s: 1.0),\n    output: (formats: [Ply, Obj]),",
@@ -103,20 +82,11 @@ fn quiet_prints_nothing_and_ply_frames_are_binary_meshes() {
         "--quiet",
     ]);
     assert!(output.status.success(), "{}", text(&output.stderr));
-    assert!(
-        output.stdout.is_empty() && output.stderr.is_empty(),
-        "--quiet printed something"
-    );
+    assert!(output.stdout.is_empty() && output.stderr.is_empty(), "--quiet printed something");
     let ply = std::fs::read(out.join("frames/frame_0002.ply")).expect("ply frame");
-    let header_end = ply
-        .windows(11)
-        .position(|w| w == b"end_header\n")
-        .expect("PLY header")
-        + 11;
+    let header_end = ply.windows(11).position(|w| w == b"end_header\n").expect("PLY header") + 11;
     let header = String::from_utf8_lossy(&ply[..header_end]);
-    assert!(
-        header.contains("format binary_little_endian 1.0") && header.contains("element vertex 256")
-    );
+    assert!(header.contains("format binary_little_endian 1.0") && header.contains("element vertex 256"));
     assert_eq!(ply.len() - header_end, 256 * 6 * 4 + 450 * (1 + 3 * 4));
     assert!(out.join("frames/frame_0002.obj").exists());
 }
@@ -126,12 +96,7 @@ fn check_prints_what_the_scene_builds() {
     let output = selvedge(&["check", "scenes/hang.ron"]);
     assert!(output.status.success(), "{}", text(&output.stderr));
     let stdout = text(&output.stdout);
-    for line in [
-        "particles  1024",
-        "springs    5826",
-        "triangles  1922",
-        "pins       2",
-    ] {
+    for line in ["particles  1024", "springs    5826", "triangles  1922", "pins       2"] {
         assert!(stdout.contains(line), "`{line}` not in:\n{stdout}");
     }
 }
@@ -150,39 +115,20 @@ fn a_diverging_run_stops_keeps_its_frames_and_exits_3() {
     )
     .expect("write scene");
     let out = dir.path().join("out");
-    let output = selvedge(&[
-        "run",
-        scene.to_str().expect("utf-8"),
-        "--out",
-        out.to_str().expect("utf-8"),
-        "--quiet",
-    ]);
+    let output = selvedge(&["run", scene.to_str().expect("utf-8"), "--out", out.to_str().expect("utf-8"), "--quiet"]);
     assert_eq!(output.status.code(), Some(3), "{}", text(&output.stderr));
     let stderr = text(&output.stderr);
-    assert!(
-        stderr.contains("diverged in frame") && stderr.contains("cloth `c`"),
-        "{stderr}"
-    );
+    assert!(stderr.contains("diverged in frame") && stderr.contains("cloth `c`"), "{stderr}");
     let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary"))
-            .expect("json");
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary")).expect("json");
     assert_eq!(summary["status"], "diverged");
     let frames = summary["frames"].as_u64().expect("number");
     assert!(frames < 100);
-    let written = std::fs::read_dir(out.join("frames"))
-        .expect("frames")
-        .count() as u64;
-    assert_eq!(
-        written,
-        frames + 1,
-        "frame 0 and every good frame are kept, the bad one is not written"
-    );
+    let written = std::fs::read_dir(out.join("frames")).expect("frames").count() as u64;
+    assert_eq!(written, frames + 1, "frame 0 and every good frame are kept, the bad one is not written");
     for obj in std::fs::read_dir(out.join("frames")).expect("frames") {
         let content = std::fs::read_to_string(obj.expect("entry").path()).expect("readable");
-        assert!(
-            !content.contains("NaN") && !content.contains("inf"),
-            "a written frame holds garbage"
-        );
+        assert!(!content.contains("NaN") && !content.contains("inf"), "a written frame holds garbage");
     }
 }
 
@@ -195,10 +141,7 @@ fn a_broken_scene_exits_2_with_its_location() {
         let output = selvedge(&[command, scene.to_str().expect("utf-8")]);
         assert_eq!(output.status.code(), Some(2));
         let stderr = text(&output.stderr);
-        assert!(
-            stderr.contains("broken.ron:3:") && stderr.contains("tme"),
-            "{stderr}"
-        );
+        assert!(stderr.contains("broken.ron:3:") && stderr.contains("tme"), "{stderr}");
     }
     let missing = selvedge(&["check", "scenes/does_not_exist.ron"]);
     assert_eq!(missing.status.code(), Some(2));

@@ -22,11 +22,7 @@ fn sheet(drag: f32, integrator: &str, edits: &str) -> Simulation {
 }
 
 fn particles(sim: &mut Simulation) -> Particles {
-    sim.world_mut()
-        .query::<&Particles>()
-        .single(sim.world())
-        .expect("one cloth")
-        .clone()
+    sim.world_mut().query::<&Particles>().single(sim.world()).expect("one cloth").clone()
 }
 
 /// Mass-weighted centre and velocity of the particles whose rest position satisfies `side`.
@@ -42,11 +38,7 @@ fn centre_of_mass(p: &Particles, side: impl Fn(Vec3) -> bool) -> (Vec3, Vec3) {
 }
 
 fn topology_builds(sim: &mut Simulation) -> u32 {
-    sim.world_mut()
-        .query::<&ClothTopology>()
-        .single(sim.world())
-        .expect("one cloth")
-        .builds
+    sim.world_mut().query::<&ClothTopology>().single(sim.world()).expect("one cloth").builds
 }
 
 #[test]
@@ -57,49 +49,25 @@ fn a_torn_sheet_hangs_as_two_halves_under_their_own_pins() {
         "(at_s: 1.0, cloth: \"sheet\", action: Tear(point: (0.0, 2.0, 0.0), normal: (1.0, 0.0, 0.0)))",
     );
     common::run_frames(&mut sim, 59);
-    assert_eq!(
-        topology_builds(&mut sim),
-        1,
-        "the cache is built once and not rebuilt every frame"
-    );
+    assert_eq!(topology_builds(&mut sim), 1, "the cache is built once and not rebuilt every frame");
     let before = particles(&mut sim);
     let (left_before, _) = centre_of_mass(&before, |r| r.x < 0.0);
     common::run_frames(&mut sim, 1 + 240);
-    assert_eq!(
-        topology_builds(&mut sim),
-        2,
-        "the tear rebuilt the cache once"
-    );
+    assert_eq!(topology_builds(&mut sim), 2, "the tear rebuilt the cache once");
     let after = particles(&mut sim);
-    let springs = sim
-        .world_mut()
-        .query::<&Springs>()
-        .single(sim.world())
-        .expect("one cloth")
-        .clone();
+    let springs = sim.world_mut().query::<&Springs>().single(sim.world()).expect("one cloth").clone();
     let crossing = springs
         .pairs
         .iter()
-        .filter(|[i, j]| {
-            (after.rest_position[*i as usize].x < 0.0) != (after.rest_position[*j as usize].x < 0.0)
-        })
+        .filter(|[i, j]| (after.rest_position[*i as usize].x < 0.0) != (after.rest_position[*j as usize].x < 0.0))
         .count();
     assert_eq!(crossing, 0, "no spring joins the two halves after the tear");
     let (left, _) = centre_of_mass(&after, |r| r.x < 0.0);
     let (right, _) = centre_of_mass(&after, |r| r.x >= 0.0);
     // A body hanging from one point rests with its centre of mass below that point.
-    assert!(
-        left_before.x > -0.3,
-        "before the tear the left half is spread: {left_before}"
-    );
-    assert!(
-        (left.x + 0.5).abs() < 0.02,
-        "left half hangs below its pin at x = -0.5: {left}"
-    );
-    assert!(
-        (right.x - 0.5).abs() < 0.02,
-        "right half hangs below its pin at x = 0.5: {right}"
-    );
+    assert!(left_before.x > -0.3, "before the tear the left half is spread: {left_before}");
+    assert!((left.x + 0.5).abs() < 0.02, "left half hangs below its pin at x = -0.5: {left}");
+    assert!((right.x - 0.5).abs() < 0.02, "right half hangs below its pin at x = 0.5: {right}");
 }
 
 #[test]
@@ -111,12 +79,7 @@ fn a_released_half_falls_with_its_centre_of_mass_accelerating_at_g() {
          (at_s: 1.0, cloth: \"sheet\", action: Unpin([Corners([TopRight])]))",
     );
     common::run_frames(&mut sim, 60);
-    let pins = sim
-        .world_mut()
-        .query::<&Pins>()
-        .single(sim.world())
-        .expect("one cloth")
-        .clone();
+    let pins = sim.world_mut().query::<&Pins>().single(sim.world()).expect("one cloth").clone();
     assert_eq!(pins.len(), 2, "the release is not due before its time");
     common::run_frames(&mut sim, 1);
     let (start_time, start) = (sim.clock().time_s, particles(&mut sim));
@@ -129,17 +92,8 @@ fn a_released_half_falls_with_its_centre_of_mass_accelerating_at_g() {
     let (x1, _) = centre_of_mass(&particles(&mut sim), |r| r.x >= 0.0);
     // Internal forces cancel in pairs: only gravity moves the centre of mass.
     let expected = x0 + v0 * t + 0.5 * Vec3::new(0.0, -G, 0.0) * t * t;
-    assert!(
-        (x1 - expected).length() < 1e-3,
-        "centre of mass at {x1}, free fall predicts {expected}"
-    );
-    let pinned_particle = sim
-        .world_mut()
-        .query::<&Pins>()
-        .single(sim.world())
-        .expect("one cloth")
-        .particles
-        .clone();
+    assert!((x1 - expected).length() < 1e-3, "centre of mass at {x1}, free fall predicts {expected}");
+    let pinned_particle = sim.world_mut().query::<&Pins>().single(sim.world()).expect("one cloth").particles.clone();
     assert_eq!(pinned_particle.len(), 1, "one pin was released");
     assert!(start_time > 1.0 && start_time <= 1.0 + frame + 1e-6);
 }
@@ -153,34 +107,15 @@ fn a_pin_added_through_the_world_holds_its_particle_from_the_next_frame() {
     ));
     common::run_frames(&mut sim, 10);
     let entity = sim.cloth_entity("sheet").expect("the cloth exists");
-    let held = sim
-        .world()
-        .get::<Particles>(entity)
-        .expect("particles")
-        .position[63];
-    sim.world_mut()
-        .get_mut::<Pins>(entity)
-        .expect("pins")
-        .insert(63, held);
+    let held = sim.world().get::<Particles>(entity).expect("particles").position[63];
+    sim.world_mut().get_mut::<Pins>(entity).expect("pins").insert(63, held);
     common::run_frames(&mut sim, 20);
     let p = particles(&mut sim);
-    assert_eq!(
-        p.position[63], held,
-        "the pinned particle stays where it was pinned"
-    );
-    assert!(
-        p.position[0].y < held.y - 0.1,
-        "the rest of the cloth falls below it"
-    );
+    assert_eq!(p.position[63], held, "the pinned particle stays where it was pinned");
+    assert!(p.position[0].y < held.y - 0.1, "the rest of the cloth falls below it");
     assert_eq!(topology_builds(&mut sim), 2);
 
-    sim.world_mut()
-        .get_mut::<Pins>(entity)
-        .expect("pins")
-        .remove(63);
+    sim.world_mut().get_mut::<Pins>(entity).expect("pins").remove(63);
     common::run_frames(&mut sim, 10);
-    assert!(
-        particles(&mut sim).position[63].y < held.y - 0.05,
-        "released, it falls again"
-    );
+    assert!(particles(&mut sim).position[63].y < held.y - 0.05, "released, it falls again");
 }

@@ -13,9 +13,8 @@ fn an_undamped_swinging_cloth_keeps_its_energy_within_one_percent_over_ten_secon
                     material: {}, pins: [Corners([BottomLeft, BottomRight])])])",
         common::material(100.0, 0.0)
     ));
-    let total = |sim: &selvedge::Simulation| {
-        common::probe(sim, "kinetic_energy_j") + common::probe(sim, "potential_energy_j")
-    };
+    let total =
+        |sim: &selvedge::Simulation| common::probe(sim, "kinetic_energy_j") + common::probe(sim, "potential_energy_j");
     common::run_frames(&mut sim, 1);
     let initial = total(&sim);
     let (mut worst, mut largest_kinetic) = (0.0f64, 0.0f64);
@@ -24,10 +23,7 @@ fn an_undamped_swinging_cloth_keeps_its_energy_within_one_percent_over_ten_secon
         worst = worst.max((total(&sim) - initial).abs());
         largest_kinetic = largest_kinetic.max(common::probe(&sim, "kinetic_energy_j"));
     }
-    assert!(
-        largest_kinetic > 0.5,
-        "the cloth should swing: peak kinetic energy {largest_kinetic} J"
-    );
+    assert!(largest_kinetic > 0.5, "the cloth should swing: peak kinetic energy {largest_kinetic} J");
     // Measured against the energy that moves (the peak kinetic energy), which is stricter
     // than against the total, whose gravitational part depends on where y = 0 is.
     assert!(

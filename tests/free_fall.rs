@@ -3,40 +3,18 @@
 
 mod common;
 
+use common::oscillator::{ParticleSystem, with_tolerance};
 use glam::Vec3;
-use selvedge::components::Particles;
-use selvedge::solver::integrate::{Dynamics, Integrator, IntegratorWorkspace, step};
+use selvedge::components::{Particles, Springs};
+use selvedge::solver::integrate::Integrator;
 
 const G: f32 = 9.81;
 
-struct Gravity;
-
-impl Dynamics for Gravity {
-    fn acceleration(&mut self, _x: &[Vec3], _v: &[Vec3], _t: f32, out: &mut [Vec3]) {
-        out.fill(Vec3::new(0.0, -G, 0.0));
-    }
-}
-
 /// Drops one particle from rest at 100 m for 1 s in steps of `h`; returns (y, v).
 fn drop_particle(method: Integrator, h: f32) -> (f32, f32) {
-    let (mut x, mut v) = (vec![Vec3::new(0.0, 100.0, 0.0)], vec![Vec3::ZERO]);
-    let mut ws = IntegratorWorkspace::default();
-    let steps = (1.0 / h).round() as u32;
-    for n in 0..steps {
-        ws.resize(1);
-        ws.start_acceleration[0] = Vec3::new(0.0, -G, 0.0);
-        step(
-            method,
-            &mut Gravity,
-            &mut x,
-            &mut v,
-            n as f32 * h,
-            h,
-            1e-5,
-            &mut ws,
-        )
-        .expect("no failure in free fall");
-    }
+    let system =
+        ParticleSystem::new(vec![Vec3::new(0.0, 100.0, 0.0)], &[1.0], Springs::default(), &[], Vec3::new(0.0, -G, 0.0));
+    let (x, v, _) = system.run(method, f64::from(h), 1.0, &with_tolerance(1e-5));
     (x[0].y, v[0].y)
 }
 
@@ -49,11 +27,12 @@ fn a_free_particle_falls_as_each_method_predicts() {
     for method in Integrator::ALL {
         let (y, v) = drop_particle(method, h);
         assert!((v + G).abs() < 1e-4, "{method:?}: v = {v}, expected {}", -G);
-        // Symplectic Euler moves with the updated velocity, explicit Euler with the old
-        // one: each is off by exactly g h t / 2, in opposite directions. Every other method
-        // integrates constant acceleration exactly.
+        // Symplectic and implicit Euler move with the updated velocity, explicit Euler with
+        // the old one: each is off by exactly g h t / 2, in opposite directions. Every other
+        // method (Newmark's trapezoidal rule included) integrates constant acceleration
+        // exactly.
         let offset = match method {
-            Integrator::SymplecticEuler => -0.5 * G * h,
+            Integrator::SymplecticEuler | Integrator::ImplicitEuler => -0.5 * G * h,
             Integrator::ExplicitEuler => 0.5 * G * h,
             _ => 0.0,
         };
@@ -73,21 +52,9 @@ fn cloth_free_fall(integrator: &str) -> (Vec<Vec3>, Vec<Vec3>, f64) {
                     material: {})])",
         common::material(200.0, 0.1)
     ));
-    let start = sim
-        .world_mut()
-        .query::<&Particles>()
-        .single(sim.world())
-        .expect("one cloth")
-        .position
-        .clone();
+    let start = sim.world_mut().query::<&Particles>().single(sim.world()).expect("one cloth").position.clone();
     common::run_frames(&mut sim, 60);
-    let end = sim
-        .world_mut()
-        .query::<&Particles>()
-        .single(sim.world())
-        .expect("one cloth")
-        .position
-        .clone();
+    let end = sim.world_mut().query::<&Particles>().single(sim.world()).expect("one cloth").position.clone();
     (start, end, sim.clock().time_s)
 }
 
@@ -97,16 +64,8 @@ fn an_unpinned_cloth_falls_as_one_body_under_velocity_verlet() {
     assert!((t - 1.0).abs() < 1e-6);
     let drop = 0.5 * G * (t as f32).powi(2);
     for (a, b) in start.iter().zip(&end) {
-        assert!(
-            (b.y - (a.y - drop)).abs() < 2e-4,
-            "y {} → {}, expected drop {drop}",
-            a.y,
-            b.y
-        );
-        assert!(
-            (b.x - a.x).abs() < 1e-5 && (b.z - a.z).abs() < 1e-5,
-            "no sideways motion"
-        );
+        assert!((b.y - (a.y - drop)).abs() < 2e-4, "y {} → {}, expected drop {drop}", a.y, b.y);
+        assert!((b.x - a.x).abs() < 1e-5 && (b.z - a.z).abs() < 1e-5, "no sideways motion");
     }
 }
 
@@ -116,11 +75,6 @@ fn an_unpinned_cloth_under_symplectic_euler_has_only_its_first_order_offset() {
     let h = 1.0 / 600.0;
     let drop = 0.5 * G * (t as f32).powi(2) + 0.5 * G * h * t as f32;
     for (a, b) in start.iter().zip(&end) {
-        assert!(
-            (b.y - (a.y - drop)).abs() < 2e-4,
-            "y {} → {}, expected drop {drop}",
-            a.y,
-            b.y
-        );
+        assert!((b.y - (a.y - drop)).abs() < 2e-4, "y {} → {}, expected drop {drop}", a.y, b.y);
     }
 }

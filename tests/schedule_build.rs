@@ -10,21 +10,10 @@ use selvedge::schedule::{SubstepSystems, build_schedules};
 fn every_schedule_initializes_without_ambiguities() {
     let mut world = World::new();
     let mut schedules = build_schedules();
-    for schedule in [
-        &mut schedules.frame,
-        &mut schedules.substep,
-        &mut schedules.render,
-    ] {
-        assert_eq!(
-            schedule.get_build_settings().ambiguity_detection,
-            LogLevel::Error
-        );
+    for schedule in [&mut schedules.frame, &mut schedules.substep, &mut schedules.render] {
+        assert_eq!(schedule.get_build_settings().ambiguity_detection, LogLevel::Error);
         if let Err(error) = schedule.initialize(&mut world) {
-            panic!(
-                "{:?} does not build: {}",
-                schedule.label(),
-                error.to_string(schedule.graph(), &world)
-            );
+            panic!("{:?} does not build: {}", schedule.label(), error.to_string(schedule.graph(), &world));
         }
     }
 }
@@ -38,9 +27,7 @@ fn an_unordered_conflict_would_be_caught() {
     }
     let mut world = World::new();
     let mut schedules = build_schedules();
-    schedules
-        .substep
-        .add_systems(nudge.in_set(SubstepSystems::Integrate));
+    schedules.substep.add_systems(nudge.in_set(SubstepSystems::Integrate));
     assert!(
         schedules.substep.initialize(&mut world).is_err(),
         "a second writer of Particles in one set must be refused"

@@ -20,9 +20,6 @@ fn a_hanging_cloth_comes_to_rest_and_the_pins_carry_its_weight() {
     let kinetic = common::probe(&sim, "kinetic_energy_j");
     let pin_force = common::probe(&sim, "pin_force_n");
     assert!(kinetic < 1e-6, "still moving: kinetic energy {kinetic} J");
-    assert!(
-        (pin_force - weight).abs() < 0.005 * weight,
-        "pins carry {pin_force} N, the cloth weighs {weight} N"
-    );
+    assert!((pin_force - weight).abs() < 0.005 * weight, "pins carry {pin_force} N, the cloth weighs {weight} N");
     eprintln!("pin force {pin_force} N, weight {weight} N, kinetic energy {kinetic:e} J");
 }

@@ -4,7 +4,7 @@ use glam::{Affine3A, Vec3};
 
 use super::ClothData;
 use crate::components::{
-    ClothMaterial, Particles, SpringCoefficients, SpringKind, Springs, Triangles,
+    BendingHinges, ClothMaterial, MembraneTriangles, Particles, SpringCoefficients, SpringKind, Springs, Triangles,
 };
 use crate::solver::geometry::lumped_masses;
 
@@ -41,60 +41,31 @@ pub fn build_grid(
     let mut triangles = Vec::with_capacity(2 * ((columns - 1) * (rows - 1)) as usize);
     for row in 0..rows - 1 {
         for column in 0..columns - 1 {
-            let (a, b, c, d) = (
-                at(column, row),
-                at(column + 1, row),
-                at(column + 1, row + 1),
-                at(column, row + 1),
-            );
+            let (a, b, c, d) = (at(column, row), at(column + 1, row), at(column + 1, row + 1), at(column, row + 1));
             triangles.push([a, b, c]);
             triangles.push([a, c, d]);
         }
     }
 
     let mut springs = Springs::default();
-    let mut add = |i: u32, j: u32, coefficients: SpringCoefficients, kind| {
-        let rest = (positions[i as usize] - positions[j as usize]).length();
-        springs.push(
-            [i, j],
-            rest,
-            coefficients.stiffness,
-            coefficients.damping,
-            kind,
-        );
+    let mut add = |i: u32, j: u32, coefficients: Option<SpringCoefficients>, kind| {
+        if let Some(c) = coefficients {
+            let rest = (positions[i as usize] - positions[j as usize]).length();
+            springs.push([i, j], rest, c.stiffness, c.damping, kind);
+        }
     };
     for row in 0..rows {
         for column in 0..columns {
             let here = at(column, row);
             if column + 1 < columns {
-                add(
-                    here,
-                    at(column + 1, row),
-                    material.stretch,
-                    SpringKind::Structural,
-                );
+                add(here, at(column + 1, row), material.stretch, SpringKind::Structural);
             }
             if row + 1 < rows {
-                add(
-                    here,
-                    at(column, row + 1),
-                    material.stretch,
-                    SpringKind::Structural,
-                );
+                add(here, at(column, row + 1), material.stretch, SpringKind::Structural);
             }
             if column + 1 < columns && row + 1 < rows {
-                add(
-                    here,
-                    at(column + 1, row + 1),
-                    material.shear,
-                    SpringKind::Shear,
-                );
-                add(
-                    at(column + 1, row),
-                    at(column, row + 1),
-                    material.shear,
-                    SpringKind::Shear,
-                );
+                add(here, at(column + 1, row + 1), material.shear, SpringKind::Shear);
+                add(at(column + 1, row), at(column, row + 1), material.shear, SpringKind::Shear);
             }
             if column + 2 < columns {
                 add(here, at(column + 2, row), material.bend, SpringKind::Bend);
@@ -110,6 +81,8 @@ pub fn build_grid(
         particles: Particles::at_rest(positions, &masses),
         springs,
         triangles: Triangles { indices: triangles },
+        hinges: BendingHinges::default(),
+        membranes: MembraneTriangles::default(),
         grid: Some(resolution),
     }
 }
@@ -119,16 +92,8 @@ mod tests {
     use super::*;
 
     fn material() -> ClothMaterial {
-        let c = SpringCoefficients {
-            stiffness: 100.0,
-            damping: 0.1,
-        };
-        ClothMaterial {
-            density: 0.2,
-            stretch: c,
-            shear: c,
-            bend: c,
-        }
+        let c = Some(SpringCoefficients { stiffness: 100.0, damping: 0.1 });
+        ClothMaterial { density: 0.2, stretch: c, shear: c, bend: c, membrane: None, bending: None, grain_deg: 0.0 }
     }
 
     #[test]

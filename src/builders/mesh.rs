@@ -6,7 +6,10 @@ use std::path::Path;
 use glam::{Affine3A, Vec3};
 
 use super::ClothData;
-use crate::components::{ClothMaterial, Particles, SpringKind, Springs, Triangles};
+use super::surface::interior_edges;
+use crate::components::{
+    BendingHinges, ClothMaterial, MembraneTriangles, Particles, SpringCoefficients, SpringKind, Springs, Triangles,
+};
 use crate::solver::geometry::{lumped_masses, triangle_area};
 
 /// A triangle mesh: vertex positions and counter-clockwise triangles.
@@ -53,10 +56,7 @@ pub enum MeshError {
 /// normal indices (`f 1/2/3 ...`) and every other statement are ignored.
 pub fn read_obj(path: &Path) -> Result<TriangleMesh, MeshError> {
     let name = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|source| MeshError::Io {
-        path: name.clone(),
-        source,
-    })?;
+    let text = std::fs::read_to_string(path).map_err(|source| MeshError::Io { path: name.clone(), source })?;
     parse_obj(&text, &name)
 }
 
@@ -64,20 +64,13 @@ pub fn read_obj(path: &Path) -> Result<TriangleMesh, MeshError> {
 pub fn parse_obj(text: &str, name: &str) -> Result<TriangleMesh, MeshError> {
     let mut mesh = TriangleMesh::default();
     for (number, line) in text.lines().enumerate() {
-        let syntax = |message: String| MeshError::Syntax {
-            path: name.to_owned(),
-            line: number + 1,
-            message,
-        };
+        let syntax = |message: String| MeshError::Syntax { path: name.to_owned(), line: number + 1, message };
         let mut words = line.split_whitespace();
         match words.next() {
             Some("v") => {
                 let coordinates: Vec<f32> = words
                     .take(3)
-                    .map(|w| {
-                        w.parse::<f32>()
-                            .map_err(|_| syntax(format!("`{w}` is not a number")))
-                    })
+                    .map(|w| w.parse::<f32>().map_err(|_| syntax(format!("`{w}` is not a number"))))
                     .collect::<Result<_, _>>()?;
                 let [x, y, z] = coordinates[..] else {
                     return Err(syntax("a vertex needs three coordinates".into()));
@@ -91,16 +84,14 @@ pub fn parse_obj(text: &str, name: &str) -> Result<TriangleMesh, MeshError> {
             Some("f") => {
                 let corners: Vec<u32> = words
                     .map(|w| {
-                        obj_index(w, mesh.positions.len())
-                            .ok_or_else(|| syntax(format!("bad vertex reference `{w}`")))
+                        obj_index(w, mesh.positions.len()).ok_or_else(|| syntax(format!("bad vertex reference `{w}`")))
                     })
                     .collect::<Result<_, _>>()?;
                 if corners.len() < 3 {
                     return Err(syntax("a face needs at least three vertices".into()));
                 }
                 for k in 1..corners.len() - 1 {
-                    mesh.triangles
-                        .push([corners[0], corners[k], corners[k + 1]]);
+                    mesh.triangles.push([corners[0], corners[k], corners[k + 1]]);
                 }
             }
             _ => {}
@@ -112,14 +103,8 @@ pub fn parse_obj(text: &str, name: &str) -> Result<TriangleMesh, MeshError> {
 /// Resolves an OBJ vertex reference (1-based, or negative from the end) to a 0-based index.
 fn obj_index(word: &str, vertex_count: usize) -> Option<u32> {
     let index: i64 = word.split('/').next()?.parse().ok()?;
-    let resolved = if index > 0 {
-        index - 1
-    } else {
-        vertex_count as i64 + index
-    };
-    (0..vertex_count as i64)
-        .contains(&resolved)
-        .then_some(resolved as u32)
+    let resolved = if index > 0 { index - 1 } else { vertex_count as i64 + index };
+    (0..vertex_count as i64).contains(&resolved).then_some(resolved as u32)
 }
 
 /// Builds a cloth from `mesh` placed by `placement`. Vertices on no face are dropped.
@@ -130,10 +115,7 @@ pub fn build_from_mesh(
     material: &ClothMaterial,
     name: &str,
 ) -> Result<ClothData, MeshError> {
-    let invalid = |message: String| MeshError::Invalid {
-        path: name.to_owned(),
-        message,
-    };
+    let invalid = |message: String| MeshError::Invalid { path: name.to_owned(), message };
     if mesh.triangles.is_empty() {
         return Err(invalid("the mesh has no faces".into()));
     }
@@ -151,46 +133,30 @@ pub fn build_from_mesh(
             positions.push(placement.transform_point3(mesh.positions[old]));
         }
     }
-    let triangles: Vec<[u32; 3]> = mesh
-        .triangles
-        .iter()
-        .map(|t| t.map(|p| remap[p as usize]))
-        .collect();
+    let triangles: Vec<[u32; 3]> = mesh.triangles.iter().map(|t| t.map(|p| remap[p as usize])).collect();
     for (index, tri) in triangles.iter().enumerate() {
         let [a, b, c] = tri.map(|p| positions[p as usize]);
         if triangle_area(a, b, c) <= 1e-12 {
-            return Err(invalid(format!(
-                "face {} has zero area; remove it or fix its vertices",
-                index + 1
-            )));
+            return Err(invalid(format!("face {} has zero area; remove it or fix its vertices", index + 1)));
         }
     }
 
     let mut springs = Springs::default();
-    let add = |springs: &mut Springs, i: u32, j: u32, kind: SpringKind| {
-        let c = if kind == SpringKind::Bend {
-            material.bend
-        } else {
-            material.stretch
-        };
-        let rest = (positions[i as usize] - positions[j as usize]).length();
-        springs.push([i, j], rest, c.stiffness, c.damping, kind);
-    };
-    let edges = edge_faces(&triangles);
-    let mut start = 0;
-    while start < edges.len() {
-        let edge = edges[start].0;
-        let end = start + edges[start..].iter().take_while(|e| e.0 == edge).count();
-        add(&mut springs, edge[0], edge[1], SpringKind::Structural);
-        if end - start == 2 {
-            add(
-                &mut springs,
-                edges[start].1,
-                edges[start + 1].1,
-                SpringKind::Bend,
-            );
+    let mut add = |i: u32, j: u32, coefficients: Option<SpringCoefficients>, kind| {
+        if let Some(c) = coefficients {
+            let rest = (positions[i as usize] - positions[j as usize]).length();
+            springs.push([i, j], rest, c.stiffness, c.damping, kind);
         }
-        start = end;
+    };
+    let mut edges: Vec<[u32; 2]> =
+        triangles.iter().flat_map(|&[a, b, c]| [[a, b], [b, c], [c, a]]).map(|[i, j]| [i.min(j), i.max(j)]).collect();
+    edges.sort_unstable();
+    edges.dedup();
+    for [i, j] in edges {
+        add(i, j, material.stretch, SpringKind::Structural);
+    }
+    for edge in interior_edges(&triangles) {
+        add(edge.o1, edge.o2, material.bend, SpringKind::Bend);
     }
 
     let masses = lumped_masses(&positions, &triangles, material.density);
@@ -198,78 +164,46 @@ pub fn build_from_mesh(
         particles: Particles::at_rest(positions, &masses),
         springs,
         triangles: Triangles { indices: triangles },
+        hinges: BendingHinges::default(),
+        membranes: MembraneTriangles::default(),
         grid: None,
     })
-}
-
-/// Every (edge, opposite vertex) of every triangle, sorted by edge: the triangles sharing
-/// an edge end up next to each other.
-fn edge_faces(triangles: &[[u32; 3]]) -> Vec<([u32; 2], u32)> {
-    let mut edges: Vec<([u32; 2], u32)> = triangles
-        .iter()
-        .flat_map(|&[a, b, c]| [([a, b], c), ([b, c], a), ([c, a], b)])
-        .map(|([i, j], opposite)| ([i.min(j), i.max(j)], opposite))
-        .collect();
-    edges.sort_unstable();
-    edges
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::components::SpringCoefficients;
 
-    const SQUARE: &str =
-        "# a unit square\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 9 9 9\nf 1/1 2/2 3/3\nf 1 3 -2\n";
+    const SQUARE: &str = "# a unit square\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 9 9 9\nf 1/1 2/2 3/3\nf 1 3 -2\n";
 
     fn material() -> ClothMaterial {
-        let c = SpringCoefficients {
-            stiffness: 10.0,
-            damping: 0.0,
-        };
-        ClothMaterial {
-            density: 2.0,
-            stretch: c,
-            shear: c,
-            bend: c,
-        }
+        let c = Some(SpringCoefficients { stiffness: 10.0, damping: 0.0 });
+        ClothMaterial { density: 2.0, stretch: c, shear: c, bend: c, membrane: None, bending: None, grain_deg: 0.0 }
     }
 
     #[test]
     fn a_square_of_two_triangles_has_five_edges_and_one_bend_spring() {
         let mesh = parse_obj(SQUARE, "square.obj").expect("valid OBJ");
         assert_eq!(mesh.triangles, vec![[0, 1, 2], [0, 2, 3]]);
-        let cloth = build_from_mesh(&mesh, Affine3A::IDENTITY, &material(), "square.obj")
-            .expect("valid mesh");
+        let cloth = build_from_mesh(&mesh, Affine3A::IDENTITY, &material(), "square.obj").expect("valid mesh");
         assert_eq!(cloth.particles.len(), 4, "the unused vertex is dropped");
-        let bends: Vec<_> = cloth
-            .springs
-            .pairs
-            .iter()
-            .zip(&cloth.springs.kind)
-            .filter(|(_, k)| **k == SpringKind::Bend)
-            .collect();
+        let bends: Vec<_> =
+            cloth.springs.pairs.iter().zip(&cloth.springs.kind).filter(|(_, k)| **k == SpringKind::Bend).collect();
         assert_eq!(cloth.springs.len(), 6);
         assert_eq!(bends.len(), 1);
         assert_eq!(*bends[0].0, [1, 3]);
+        assert_eq!(cloth.springs.kind.iter().filter(|k| **k == SpringKind::Structural).count(), 5);
         assert!((cloth.particles.total_mass() - 2.0).abs() < 1e-6);
     }
 
     #[test]
     fn errors_name_the_line_or_the_face() {
         let err = parse_obj("v 0 0\n", "bad.obj").expect_err("two coordinates");
-        assert_eq!(
-            err.to_string(),
-            "bad.obj:1: a vertex needs three coordinates"
-        );
+        assert_eq!(err.to_string(), "bad.obj:1: a vertex needs three coordinates");
         let err = parse_obj("v 0 0 0\nf 1 2 3\n", "bad.obj").expect_err("missing vertices");
-        assert!(
-            err.to_string()
-                .contains("bad.obj:2: bad vertex reference `2`")
-        );
+        assert!(err.to_string().contains("bad.obj:2: bad vertex reference `2`"));
         let flat = parse_obj("v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "flat.obj").expect("parses");
-        let err = build_from_mesh(&flat, Affine3A::IDENTITY, &material(), "flat.obj")
-            .expect_err("zero area");
+        let err = build_from_mesh(&flat, Affine3A::IDENTITY, &material(), "flat.obj").expect_err("zero area");
         assert!(err.to_string().contains("face 1 has zero area"));
     }
 }

@@ -77,11 +77,7 @@ pub enum SelectionError {
 impl PinSelection {
     /// The particles selected, sorted and unique, among `positions` of a cloth that is a
     /// grid of `grid = (columns, rows)` if it is one.
-    pub fn resolve(
-        &self,
-        positions: &[Vec3],
-        grid: Option<(u32, u32)>,
-    ) -> Result<Vec<u32>, SelectionError> {
+    pub fn resolve(&self, positions: &[Vec3], grid: Option<(u32, u32)>) -> Result<Vec<u32>, SelectionError> {
         let count = positions.len();
         let mut chosen = match self {
             PinSelection::Indices(indices) => {
@@ -106,13 +102,9 @@ impl PinSelection {
                 let (columns, rows) = grid.ok_or(SelectionError::NotAGrid)?;
                 match edge {
                     GridEdge::Bottom => (0..columns).map(|c| grid_index(columns, c, 0)).collect(),
-                    GridEdge::Top => (0..columns)
-                        .map(|c| grid_index(columns, c, rows - 1))
-                        .collect(),
+                    GridEdge::Top => (0..columns).map(|c| grid_index(columns, c, rows - 1)).collect(),
                     GridEdge::Left => (0..rows).map(|r| grid_index(columns, 0, r)).collect(),
-                    GridEdge::Right => (0..rows)
-                        .map(|r| grid_index(columns, columns - 1, r))
-                        .collect(),
+                    GridEdge::Right => (0..rows).map(|r| grid_index(columns, columns - 1, r)).collect(),
                 }
             }
             PinSelection::InBox { min, max } => {
@@ -123,10 +115,7 @@ impl PinSelection {
                     .map(|(i, _)| i as u32)
                     .collect();
                 if inside.is_empty() {
-                    return Err(SelectionError::EmptyBox {
-                        min: *min,
-                        max: *max,
-                    });
+                    return Err(SelectionError::EmptyBox { min: *min, max: *max });
                 }
                 inside
             }
@@ -146,33 +135,20 @@ mod tests {
         let positions = vec![Vec3::ZERO; 6];
         let grid = Some((3, 2));
         let resolve = |s: PinSelection| s.resolve(&positions, grid).expect("valid");
-        assert_eq!(
-            resolve(PinSelection::Corners(vec![
-                GridCorner::TopRight,
-                GridCorner::BottomLeft
-            ])),
-            vec![0, 5]
-        );
+        assert_eq!(resolve(PinSelection::Corners(vec![GridCorner::TopRight, GridCorner::BottomLeft])), vec![0, 5]);
         assert_eq!(resolve(PinSelection::Edge(GridEdge::Top)), vec![3, 4, 5]);
         assert_eq!(resolve(PinSelection::Edge(GridEdge::Right)), vec![2, 5]);
         assert_eq!(
             PinSelection::Indices(vec![6]).resolve(&positions, grid),
             Err(SelectionError::OutOfRange { index: 6, count: 6 })
         );
-        assert_eq!(
-            PinSelection::Edge(GridEdge::Top).resolve(&positions, None),
-            Err(SelectionError::NotAGrid)
-        );
+        assert_eq!(PinSelection::Edge(GridEdge::Top).resolve(&positions, None), Err(SelectionError::NotAGrid));
     }
 
     #[test]
     fn a_box_selects_the_particles_inside_it() {
         let positions = vec![Vec3::ZERO, Vec3::ONE, Vec3::splat(2.0)];
-        let chosen = PinSelection::InBox {
-            min: Vec3::splat(0.5),
-            max: Vec3::splat(3.0),
-        }
-        .resolve(&positions, None);
+        let chosen = PinSelection::InBox { min: Vec3::splat(0.5), max: Vec3::splat(3.0) }.resolve(&positions, None);
         assert_eq!(chosen, Ok(vec![1, 2]));
     }
 }

@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use crate::components::{Springs, Triangles};
+use crate::components::{BendingHinges, MembraneTriangles, Springs, Triangles};
 
 /// A cut: the plane through `point` with normal `normal`, limited to `radius` [m] around
 /// `point` when given.
@@ -21,10 +21,7 @@ impl Cut {
     /// both sides of the plane (a corner on the plane counts as the positive side) and its
     /// centre within reach.
     fn severs(&self, corners: &[Vec3]) -> bool {
-        let positive = corners
-            .iter()
-            .filter(|c| (**c - self.point).dot(self.normal) >= 0.0)
-            .count();
+        let positive = corners.iter().filter(|c| (**c - self.point).dot(self.normal) >= 0.0).count();
         if positive == 0 || positive == corners.len() {
             return false;
         }
@@ -38,21 +35,54 @@ impl Cut {
     }
 }
 
-/// Removes the springs and triangles that `cut` severs at positions `x`. Returns how many
-/// springs and how many triangles were removed.
+/// What a cut removed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Torn {
+    /// Springs removed.
+    pub springs: usize,
+    /// Surface triangles removed.
+    pub triangles: usize,
+    /// Bending hinges removed.
+    pub hinges: usize,
+    /// Membrane triangles removed.
+    pub membranes: usize,
+}
+
+/// Removes every spring, triangle, hinge and membrane triangle that `cut` severs at
+/// positions `x`.
 pub fn tear(
     cut: &Cut,
     x: &[Vec3],
     springs: &mut Springs,
     triangles: &mut Triangles,
-) -> (usize, usize) {
+    hinges: &mut BendingHinges,
+    membranes: &mut MembraneTriangles,
+) -> Torn {
+    let severs = |corners: &[u32]| cut.severs(&corners.iter().map(|&p| x[p as usize]).collect::<Vec<_>>());
     let pairs = springs.pairs.clone();
-    let removed_springs = springs.remove_where(|s| cut.severs(&pairs[s].map(|p| x[p as usize])));
+    let removed_springs = springs.remove_where(|s| severs(&pairs[s]));
     let before = triangles.len();
-    triangles
-        .indices
-        .retain(|t| !cut.severs(&t.map(|p| x[p as usize])));
-    (removed_springs, before - triangles.len())
+    triangles.indices.retain(|t| !severs(t));
+    let keep: Vec<bool> = hinges.vertices.iter().map(|h| !severs(h)).collect();
+    let hinges_before = hinges.vertices.len();
+    retain_parallel(&mut hinges.vertices, &mut hinges.elements, &keep);
+    let keep: Vec<bool> = membranes.indices.iter().map(|t| !severs(t)).collect();
+    let membranes_before = membranes.indices.len();
+    retain_parallel(&mut membranes.indices, &mut membranes.elements, &keep);
+    Torn {
+        springs: removed_springs,
+        triangles: before - triangles.len(),
+        hinges: hinges_before - hinges.vertices.len(),
+        membranes: membranes_before - membranes.indices.len(),
+    }
+}
+
+/// Keeps the entries of two parallel columns where `keep` is true.
+fn retain_parallel<A, B>(a: &mut Vec<A>, b: &mut Vec<B>, keep: &[bool]) {
+    let mut k = keep.iter();
+    a.retain(|_| *k.next().expect("one flag per entry"));
+    let mut k = keep.iter();
+    b.retain(|_| *k.next().expect("one flag per entry"));
 }
 
 #[cfg(test)]
@@ -62,30 +92,19 @@ mod tests {
 
     #[test]
     fn a_cut_removes_only_what_crosses_it_within_reach() {
-        let x = [
-            Vec3::ZERO,
-            Vec3::X,
-            Vec3::new(0.0, 5.0, 0.0),
-            Vec3::new(1.0, 5.0, 0.0),
-        ];
+        let x = [Vec3::ZERO, Vec3::X, Vec3::new(0.0, 5.0, 0.0), Vec3::new(1.0, 5.0, 0.0)];
         let mut springs = Springs::default();
         springs.push([0, 1], 1.0, 1.0, 0.0, SpringKind::Structural);
         springs.push([2, 3], 1.0, 1.0, 0.0, SpringKind::Structural);
         springs.push([0, 2], 5.0, 1.0, 0.0, SpringKind::Structural);
-        let mut triangles = Triangles {
-            indices: vec![[0, 1, 3]],
-        };
-        let cut = Cut {
-            point: Vec3::new(0.5, 0.0, 0.0),
-            normal: Vec3::X,
-            radius: Some(1.0),
-        };
-        assert_eq!(tear(&cut, &x, &mut springs, &mut triangles), (1, 0));
+        let mut triangles = Triangles { indices: vec![[0, 1, 3]] };
+        let cut = Cut { point: Vec3::new(0.5, 0.0, 0.0), normal: Vec3::X, radius: Some(1.0) };
+        let (mut hinges, mut membranes) = (BendingHinges::default(), MembraneTriangles::default());
+        let torn = tear(&cut, &x, &mut springs, &mut triangles, &mut hinges, &mut membranes);
+        assert_eq!((torn.springs, torn.triangles), (1, 0));
         assert_eq!(springs.pairs, vec![[2, 3], [0, 2]]);
-        let everywhere = Cut {
-            radius: None,
-            ..cut
-        };
-        assert_eq!(tear(&everywhere, &x, &mut springs, &mut triangles), (1, 1));
+        let everywhere = Cut { radius: None, ..cut };
+        let torn = tear(&everywhere, &x, &mut springs, &mut triangles, &mut hinges, &mut membranes);
+        assert_eq!((torn.springs, torn.triangles), (1, 1));
     }
 }

@@ -53,12 +53,7 @@ pub enum Command {
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run {
-            scene,
-            out,
-            frames,
-            quiet,
-        } => run::run(&scene, out, frames, quiet),
+        Command::Run { scene, out, frames, quiet } => run::run(&scene, out, frames, quiet),
         Command::Check { scene } => check::check(&scene),
     };
     match result {
@@ -78,16 +73,10 @@ struct Failure {
 
 impl Failure {
     fn bad_input(error: impl std::fmt::Display) -> Self {
-        Self {
-            message: error.to_string(),
-            status: EXIT_BAD_INPUT,
-        }
+        Self { message: error.to_string(), status: EXIT_BAD_INPUT }
     }
 
     fn io(what: impl std::fmt::Display, error: std::io::Error) -> Self {
-        Self {
-            message: format!("{what}: {error}"),
-            status: EXIT_IO,
-        }
+        Self { message: format!("{what}: {error}"), status: EXIT_IO }
     }
 }

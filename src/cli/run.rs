@@ -13,12 +13,7 @@ use crate::io::report::{ProbeTable, Summary, write_summary};
 use crate::scene::load_scene;
 
 /// Runs the scene at `path`, writing frames, the summary and the probe table.
-pub(super) fn run(
-    path: &Path,
-    out: Option<PathBuf>,
-    frames: Option<u32>,
-    quiet: bool,
-) -> Result<(), Failure> {
+pub(super) fn run(path: &Path, out: Option<PathBuf>, frames: Option<u32>, quiet: bool) -> Result<(), Failure> {
     let file = load_scene(path).map_err(Failure::bad_input)?;
     let scene = &file.scene;
     let mut simulation = Simulation::from_file(&file).map_err(Failure::bad_input)?;
@@ -32,16 +27,11 @@ pub(super) fn run(
         .or_else(|| scene.output.directory.as_ref().map(PathBuf::from))
         .unwrap_or_else(|| Path::new("out").join(&scene.name));
     let frames_dir = dir.join("frames");
-    prepare_frames_dir(&frames_dir)
-        .map_err(|e| Failure::io(format!("cannot prepare {}", frames_dir.display()), e))?;
+    prepare_frames_dir(&frames_dir).map_err(|e| Failure::io(format!("cannot prepare {}", frames_dir.display()), e))?;
     let formats = &scene.output.formats;
     let write = |simulation: &mut Simulation, frame: u64| {
-        write_frame(&frames_dir, frame, formats, &simulation.surfaces()).map_err(|e| {
-            Failure::io(
-                format!("cannot write frame {frame} into {}", frames_dir.display()),
-                e,
-            )
-        })
+        write_frame(&frames_dir, frame, formats, &simulation.surfaces())
+            .map_err(|e| Failure::io(format!("cannot write frame {frame} into {}", frames_dir.display()), e))
     };
     write(&mut simulation, 0)?;
 
@@ -58,11 +48,7 @@ pub(super) fn run(
             break;
         }
         let clock = simulation.clock();
-        table.push(
-            frame,
-            clock.time_s,
-            simulation.probes().values.iter().map(|(k, v)| (*k, *v)),
-        );
+        table.push(frame, clock.time_s, simulation.probes().values.iter().map(|(k, v)| (*k, *v)));
         if frame.is_multiple_of(u64::from(scene.output.every)) || frame == frame_count {
             write(&mut simulation, frame)?;
         }
@@ -75,12 +61,7 @@ pub(super) fn run(
     let stats = simulation.integrator_stats();
     let summary = Summary {
         scene: scene.name.clone(),
-        status: if divergence.is_some() {
-            "diverged"
-        } else {
-            "completed"
-        }
-        .into(),
+        status: if divergence.is_some() { "diverged" } else { "completed" }.into(),
         divergence: divergence.as_ref().map(ToString::to_string),
         integrator: scene.solver.integrator.name().into(),
         frames: computed,
@@ -89,40 +70,26 @@ pub(super) fn run(
         substeps: counts.time.substeps,
         sim_time_s: clock.time_s,
         wall_time_s: wall,
-        ms_per_frame: if computed > 0 {
-            1e3 * wall / computed as f64
-        } else {
-            0.0
-        },
+        ms_per_frame: if computed > 0 { 1e3 * wall / computed as f64 } else { 0.0 },
         particles: counts.particles,
         springs: counts.springs,
         triangles: counts.triangles,
         force_evaluations: stats.evaluations,
         rejected_steps: stats.rejected,
-        probes: simulation
-            .probes()
-            .values
-            .iter()
-            .map(|(k, v)| ((*k).to_owned(), *v))
-            .collect(),
+        probes: simulation.probes().values.iter().map(|(k, v)| ((*k).to_owned(), *v)).collect(),
     };
     let summary_path = dir.join("summary.json");
     write_summary(&summary_path, &summary)
         .map_err(|e| Failure::io(format!("cannot write {}", summary_path.display()), e))?;
     let probes_path = dir.join("probes.csv");
-    table
-        .write_csv(&probes_path)
-        .map_err(|e| Failure::io(format!("cannot write {}", probes_path.display()), e))?;
+    table.write_csv(&probes_path).map_err(|e| Failure::io(format!("cannot write {}", probes_path.display()), e))?;
 
     if !quiet {
         print_summary(&summary, &dir);
     }
     match divergence {
         Some(diverged) => Err(Failure {
-            message: format!(
-                "{diverged}; the frames before it are in {}",
-                frames_dir.display()
-            ),
+            message: format!("{diverged}; the frames before it are in {}", frames_dir.display()),
             status: EXIT_DIVERGED,
         }),
         None => Ok(()),
@@ -135,10 +102,7 @@ fn prepare_frames_dir(dir: &Path) -> std::io::Result<()> {
     std::fs::create_dir_all(dir)?;
     for entry in std::fs::read_dir(dir)? {
         let path = entry?.path();
-        let name = path
-            .file_name()
-            .and_then(|n| n.to_str())
-            .unwrap_or_default();
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
         if name.starts_with("frame_") && (name.ends_with(".obj") || name.ends_with(".ply")) {
             std::fs::remove_file(&path)?;
         }
@@ -158,10 +122,7 @@ fn print_summary(summary: &Summary, dir: &Path) {
         summary.integrator,
         summary.substeps
     );
-    println!(
-        "  {} particles, {} springs, {} triangles",
-        summary.particles, summary.springs, summary.triangles
-    );
+    println!("  {} particles, {} springs, {} triangles", summary.particles, summary.springs, summary.triangles);
     for (name, value) in &summary.probes {
         println!("  {name:<20} {value:.6}");
     }
@@ -182,9 +143,9 @@ impl Progress {
             Progress::Silent
         } else if std::io::stderr().is_terminal() {
             let bar = ProgressBar::new(total);
-            if let Ok(style) = ProgressStyle::with_template(
-                "{bar:40} {pos}/{len} frames  {elapsed_precise} (eta {eta})",
-            ) {
+            if let Ok(style) =
+                ProgressStyle::with_template("{bar:40} {pos}/{len} frames  {elapsed_precise} (eta {eta})")
+            {
                 bar.set_style(style);
             }
             Progress::Bar(bar)

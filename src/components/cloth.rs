@@ -3,6 +3,8 @@
 use bevy_ecs::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::solver::elements::MembraneMaterial;
+
 /// A simulated piece of cloth: one entity that owns all of its particles.
 #[derive(Component, Debug, Clone, PartialEq)]
 pub struct Cloth {
@@ -24,18 +26,95 @@ pub struct SpringCoefficients {
     pub damping: f32,
 }
 
-/// The physical description of a cloth, as the scene gave it. The per-spring values in
-/// [`Springs`](crate::components::Springs) are derived from it when the cloth is built.
+/// Membrane stiffness: Zheng's four constants, or an isotropic sheet.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum MembraneDesc {
+    /// `d1` warp, `d2` weft, `d3` coupling, `d4` shear [N/m] (Zheng eq. 2.13).
+    Anisotropic {
+        /// Warp stiffness [N/m].
+        d1: f32,
+        /// Weft stiffness [N/m].
+        d2: f32,
+        /// Coupling [N/m].
+        d3: f32,
+        /// Shear stiffness [N/m].
+        d4: f32,
+    },
+    /// Plane stress with 2-D Young's modulus [N/m] (modulus × thickness) and Poisson ratio.
+    Isotropic {
+        /// 2-D Young's modulus [N/m].
+        young: f32,
+        /// Poisson ratio [-], in [0, 0.5).
+        poisson: f32,
+    },
+}
+
+impl MembraneDesc {
+    /// The constants of the membrane law.
+    pub fn material(self) -> MembraneMaterial {
+        match self {
+            MembraneDesc::Anisotropic { d1, d2, d3, d4 } => MembraneMaterial { d1, d2, d3, d4 },
+            MembraneDesc::Isotropic { young, poisson } => MembraneMaterial::isotropic(young, poisson),
+        }
+    }
+}
+
+/// A moment–curvature law for the bending hinges.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum BendingLawDesc {
+    /// `m = B κ`.
+    Linear,
+    /// Zheng's `m = 2 B₀ √(κ₀|κ|)` up to κ₀ [1/m], then `B₀(|κ| + κ₀)`; the rigidities are B₀.
+    Zheng {
+        /// Knee curvature κ₀ [1/m].
+        kappa0: f32,
+    },
+}
+
+/// Bending over the hinges of the surface, by direction.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BendingDesc {
+    /// Rigidity for bending along the warp [N·m] (per unit width: N·m²/m); the value a
+    /// cantilever test of a strip cut along the warp measures.
+    pub warp: f32,
+    /// Rigidity for bending along the weft [N·m].
+    pub weft: f32,
+    /// The law; linear unless given.
+    #[serde(default = "linear_law")]
+    pub law: BendingLawDesc,
+}
+
+fn linear_law() -> BendingLawDesc {
+    BendingLawDesc::Linear
+}
+
+/// The physical description of a cloth, as the scene gave it: any combination of Provot
+/// springs, membrane triangles and bending hinges. The element constants on the cloth
+/// are derived from it when the cloth is built.
 #[derive(Component, Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ClothMaterial {
     /// Areal density [kg/m²]; each particle carries the mass of the area it represents.
     pub density: f32,
     /// Structural springs along warp and weft (grid rows and columns, mesh edges).
-    pub stretch: SpringCoefficients,
+    #[serde(default)]
+    pub stretch: Option<SpringCoefficients>,
     /// Shear springs across the diagonals of each grid cell (grids only).
-    pub shear: SpringCoefficients,
+    #[serde(default)]
+    pub shear: Option<SpringCoefficients>,
     /// Bend springs that skip one particle (grids) or join the far vertices of two
     /// triangles sharing an edge (meshes).
-    pub bend: SpringCoefficients,
+    #[serde(default)]
+    pub bend: Option<SpringCoefficients>,
+    /// Membrane triangles (stretch and shear as a continuum).
+    #[serde(default)]
+    pub membrane: Option<MembraneDesc>,
+    /// Bending hinges over interior edges.
+    #[serde(default)]
+    pub bending: Option<BendingDesc>,
+    /// Direction of the warp in the cloth's local XY plane, from local +X [degrees]; the
+    /// weft is perpendicular to it.
+    #[serde(default)]
+    pub grain_deg: f32,
 }

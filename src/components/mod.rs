@@ -1,8 +1,9 @@
 //! The components of a garment entity: hot data as structure-of-arrays columns indexed by
 //! particle number, plus derived caches. See [`Particles`], [`Springs`], [`Triangles`],
-//! [`Pins`], [`UserForces`] and [`ClothTopology`].
+//! [`Pins`], [`BendingHinges`], [`MembraneTriangles`], [`UserForces`] and [`ClothTopology`].
 
 mod cloth;
+mod elements;
 mod particles;
 mod pins;
 mod springs;
@@ -10,7 +11,8 @@ mod topology;
 mod triangles;
 mod user_forces;
 
-pub use cloth::{Cloth, ClothMaterial, SpringCoefficients};
+pub use cloth::{BendingDesc, BendingLawDesc, Cloth, ClothMaterial, MembraneDesc, SpringCoefficients};
+pub use elements::{BendingHinges, MembraneTriangles};
 pub use particles::Particles;
 pub use pins::Pins;
 pub use springs::{SpringKind, Springs};

@@ -43,14 +43,7 @@ impl Springs {
     }
 
     /// Appends one spring.
-    pub fn push(
-        &mut self,
-        pair: [u32; 2],
-        rest_length: f32,
-        stiffness: f32,
-        damping: f32,
-        kind: SpringKind,
-    ) {
+    pub fn push(&mut self, pair: [u32; 2], rest_length: f32, stiffness: f32, damping: f32, kind: SpringKind) {
         self.pairs.push(pair);
         self.rest_length.push(rest_length);
         self.stiffness.push(stiffness);

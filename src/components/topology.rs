@@ -3,6 +3,8 @@
 use bevy_ecs::prelude::*;
 use glam::Vec3;
 
+use super::{BendingHinges, MembraneTriangles, Springs, Triangles};
+use crate::solver::elements::BlockPattern;
 use crate::solver::forces::ForceScratch;
 use crate::solver::integrate::IntegratorWorkspace;
 
@@ -17,8 +19,19 @@ pub struct Csr {
 }
 
 impl Csr {
-    /// Builds the rows of `row_count` particles from items that each touch a few particles.
+    /// Builds the rows of `row_count` particles from items that each touch a few
+    /// particles; a row lists item indices.
     pub fn from_items<const N: usize>(row_count: usize, items: &[[u32; N]]) -> Self {
+        Self::build(row_count, items, |item, _| item)
+    }
+
+    /// Like [`Csr::from_items`], but a row lists corners `item · N + slot`, so a gather
+    /// can pick the force an element puts on that particle.
+    pub fn from_corners<const N: usize>(row_count: usize, items: &[[u32; N]]) -> Self {
+        Self::build(row_count, items, |item, slot| item * N as u32 + slot)
+    }
+
+    fn build<const N: usize>(row_count: usize, items: &[[u32; N]], entry: impl Fn(u32, u32) -> u32) -> Self {
         let mut offsets = vec![0u32; row_count + 1];
         for item in items {
             for &p in item {
@@ -31,15 +44,12 @@ impl Csr {
         let mut fill = offsets.clone();
         let mut rows = vec![0u32; offsets[row_count] as usize];
         for (index, item) in items.iter().enumerate() {
-            for &p in item {
-                rows[fill[p as usize] as usize] = index as u32;
+            for (slot, &p) in item.iter().enumerate() {
+                rows[fill[p as usize] as usize] = entry(index as u32, slot as u32);
                 fill[p as usize] += 1;
             }
         }
-        Self {
-            offsets,
-            items: rows,
-        }
+        Self { offsets, items: rows }
     }
 
     /// The items of row `row`.
@@ -48,19 +58,70 @@ impl Csr {
     }
 }
 
-/// Structure derived from [`Springs`](crate::components::Springs),
-/// [`Triangles`](crate::components::Triangles) and [`Pins`](crate::components::Pins):
-/// rebuilt only when change detection says one of them changed.
+/// Structure derived from a cloth's springs, triangles, hinges, membrane triangles and
+/// pins: rebuilt only when change detection says one of them changed.
 #[derive(Component, Debug, Clone, Default, PartialEq)]
 pub struct ClothTopology {
     /// Springs touching each particle.
     pub particle_springs: Csr,
     /// Triangles touching each particle.
     pub particle_triangles: Csr,
+    /// Hinge corners `4 h + c` at each particle.
+    pub particle_hinges: Csr,
+    /// Membrane corners `3 t + c` at each particle.
+    pub particle_membranes: Csr,
+    /// Which 3×3 blocks the derivatives ∂f/∂x and ∂f/∂v have.
+    pub pattern: BlockPattern,
+    /// Where each spring's local blocks go in the pattern.
+    pub spring_slots: Vec<[[u32; 2]; 2]>,
+    /// Where each hinge's local blocks go.
+    pub hinge_slots: Vec<[[u32; 4]; 4]>,
+    /// Where each membrane triangle's local blocks go.
+    pub membrane_slots: Vec<[[u32; 3]; 3]>,
     /// Inverse mass with pinned particles at zero [1/kg]: what the integrators accelerate.
     pub free_inv_mass: Vec<f32>,
     /// How many times this cache was built; lets tests see it is not rebuilt every step.
     pub builds: u32,
+}
+
+impl ClothTopology {
+    /// Derives the topology of a cloth. `builds` counts how often this was done.
+    pub fn build(
+        inv_mass: &[f32],
+        springs: &Springs,
+        triangles: &Triangles,
+        hinges: &BendingHinges,
+        membranes: &MembraneTriangles,
+        pinned: &[u32],
+        builds: u32,
+    ) -> Self {
+        let count = inv_mass.len();
+        let pattern = BlockPattern::from_stencils(
+            count,
+            springs
+                .pairs
+                .iter()
+                .map(|p| &p[..])
+                .chain(hinges.vertices.iter().map(|h| &h[..]))
+                .chain(membranes.indices.iter().map(|t| &t[..])),
+        );
+        let mut free_inv_mass = inv_mass.to_vec();
+        for &p in pinned {
+            free_inv_mass[p as usize] = 0.0;
+        }
+        Self {
+            particle_springs: Csr::from_items(count, &springs.pairs),
+            particle_triangles: Csr::from_items(count, &triangles.indices),
+            particle_hinges: Csr::from_corners(count, &hinges.vertices),
+            particle_membranes: Csr::from_corners(count, &membranes.indices),
+            spring_slots: springs.pairs.iter().map(|&p| pattern.stencil_slots(p)).collect(),
+            hinge_slots: hinges.vertices.iter().map(|&h| pattern.stencil_slots(h)).collect(),
+            membrane_slots: membranes.indices.iter().map(|&t| pattern.stencil_slots(t)).collect(),
+            pattern,
+            free_inv_mass,
+            builds,
+        }
+    }
 }
 
 /// Per-cloth scratch buffers for integrators and force evaluation, reused every step so the

@@ -9,13 +9,9 @@ use std::path::Path;
 
 /// Writes a file through `write` into a temporary file beside `path`, then renames it
 /// over `path`: readers see the old file or the new one, never a part.
-pub fn write_atomically(
-    path: &Path,
-    write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
-) -> std::io::Result<()> {
-    let file_name = path
-        .file_name()
-        .ok_or_else(|| std::io::Error::other(format!("{} is not a file path", path.display())))?;
+pub fn write_atomically(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> std::io::Result<()> {
+    let file_name =
+        path.file_name().ok_or_else(|| std::io::Error::other(format!("{} is not a file path", path.display())))?;
     let temporary = path.with_file_name(format!(".{}.partial", file_name.to_string_lossy()));
     let result = (|| {
         let mut out = BufWriter::new(std::fs::File::create(&temporary)?);

@@ -65,12 +65,7 @@ pub struct ProbeTable {
 impl ProbeTable {
     /// Adds a row from the probes of one frame. Probes first seen now get a column of
     /// their own; earlier rows leave it empty.
-    pub fn push<'a>(
-        &mut self,
-        frame: u64,
-        time_s: f64,
-        probes: impl IntoIterator<Item = (&'a str, f64)>,
-    ) {
+    pub fn push<'a>(&mut self, frame: u64, time_s: f64, probes: impl IntoIterator<Item = (&'a str, f64)>) {
         let mut values = vec![None; self.columns.len()];
         for (name, value) in probes {
             let column = match self.columns.iter().position(|c| c == name) {

@@ -4,7 +4,7 @@ use std::path::Path;
 
 use bevy_ecs::prelude::*;
 
-use super::format::{ClothDesc, EditActionDesc, Scene, ShapeDesc};
+use super::format::{ClothDesc, EditActionDesc, RayleighDesc, Scene, ShapeDesc};
 use super::load::SceneError;
 use super::validate::{TimePlan, time_plan};
 use crate::builders::ClothData;
@@ -13,11 +13,13 @@ use crate::builders::mesh::{build_from_mesh, read_obj};
 use crate::builders::tear::Cut;
 use crate::components::{Cloth, ClothTopology, Pins, RenderMesh, SolverWorkspace, UserForces};
 use crate::resources::{
-    AirSettings, DivergenceLimit, EditAction, Gravity, Ground, HealthReport, IntegratorStats,
-    Probes, ScheduledEdit, ScheduledEdits, SimClock, SolverSettings, StepSettings,
+    AirSettings, DivergenceLimit, EditAction, Gravity, Ground, HealthReport, IntegratorStats, Probes, ScheduledEdit,
+    ScheduledEdits, SimClock, SolverSettings, StepSettings,
 };
 use crate::solver::contact::GroundPlane;
 use crate::solver::forces::{Air, Gust};
+use crate::solver::implicit::{ImplicitSettings, Rayleigh};
+use crate::solver::integrate::MethodSettings;
 
 /// What a scene builds.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -38,48 +40,27 @@ pub struct SceneCounts {
 
 /// Builds the particles, springs and triangles of one cloth; mesh paths are relative to
 /// `base_dir`. `index` is the cloth's place in the scene, for error messages.
-pub fn build_cloth(
-    desc: &ClothDesc,
-    index: usize,
-    base_dir: &Path,
-) -> Result<ClothData, SceneError> {
+pub fn build_cloth(desc: &ClothDesc, index: usize, base_dir: &Path) -> Result<ClothData, SceneError> {
     let placement = desc.placement.to_affine();
     let mut data = match &desc.shape {
-        ShapeDesc::Grid { size, resolution } => {
-            build_grid(*size, *resolution, placement, &desc.material)
-        }
+        ShapeDesc::Grid { size, resolution } => build_grid(*size, *resolution, placement, &desc.material),
         ShapeDesc::Mesh { path } => {
             let field = format!("cloths[{index}].shape.path");
             let file = base_dir.join(path);
             let mesh = read_obj(&file).map_err(|e| SceneError::invalid(&field, e.to_string()))?;
-            build_from_mesh(
-                &mesh,
-                placement,
-                &desc.material,
-                &file.display().to_string(),
-            )
-            .map_err(|e| SceneError::invalid(&field, e.to_string()))?
+            build_from_mesh(&mesh, placement, &desc.material, &file.display().to_string())
+                .map_err(|e| SceneError::invalid(&field, e.to_string()))?
         }
     };
     data.particles.velocity.fill(desc.velocity);
+    data.add_surface_elements(&desc.material, desc.placement.warp(desc.material.grain_deg));
     Ok(data)
 }
 
 /// Inserts the scene's resources into `world` and spawns its cloths.
-pub fn spawn_scene(
-    world: &mut World,
-    scene: &Scene,
-    base_dir: &Path,
-) -> Result<SceneCounts, SceneError> {
+pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<SceneCounts, SceneError> {
     let time = time_plan(scene)?;
-    let mut counts = SceneCounts {
-        time,
-        cloths: 0,
-        particles: 0,
-        springs: 0,
-        triangles: 0,
-        pins: 0,
-    };
+    let mut counts = SceneCounts { time, cloths: 0, particles: 0, springs: 0, triangles: 0, pins: 0 };
     let mut entities = Vec::new();
     for (index, desc) in scene.cloths.iter().enumerate() {
         let data = build_cloth(desc, index, base_dir)?;
@@ -87,26 +68,16 @@ pub fn spawn_scene(
         for (k, selection) in desc.pins.iter().enumerate() {
             let chosen = selection
                 .resolve(&data.particles.position, data.grid)
-                .map_err(|e| {
-                    SceneError::invalid(format!("cloths[{index}].pins[{k}]"), e.to_string())
-                })?;
+                .map_err(|e| SceneError::invalid(format!("cloths[{index}].pins[{k}]"), e.to_string()))?;
             for particle in chosen {
                 pins.insert(particle, data.particles.position[particle as usize]);
             }
         }
         let count = data.particles.len();
-        if let Some((k, force)) = desc
-            .user_forces
-            .iter()
-            .enumerate()
-            .find(|(_, f)| f.particle as usize >= count)
-        {
+        if let Some((k, force)) = desc.user_forces.iter().enumerate().find(|(_, f)| f.particle as usize >= count) {
             return Err(SceneError::invalid(
                 format!("cloths[{index}].user_forces[{k}].particle"),
-                format!(
-                    "particle {} does not exist: the cloth has {count} particles",
-                    force.particle
-                ),
+                format!("particle {} does not exist: the cloth has {count} particles", force.particle),
             ));
         }
         counts.cloths += 1;
@@ -116,57 +87,50 @@ pub fn spawn_scene(
         counts.pins += pins.len();
         entities.push((
             (
-                Cloth {
-                    name: desc.name.clone(),
-                    grid: data.grid,
-                },
+                Cloth { name: desc.name.clone(), grid: data.grid },
                 desc.material,
                 data.particles,
                 data.springs,
                 data.triangles,
                 pins,
-                UserForces {
-                    forces: desc
-                        .user_forces
-                        .iter()
-                        .map(|f| (f.particle, f.force))
-                        .collect(),
-                },
+                UserForces { forces: desc.user_forces.iter().map(|f| (f.particle, f.force)).collect() },
             ),
-            (
-                ClothTopology::default(),
-                SolverWorkspace::default(),
-                RenderMesh::default(),
-            ),
+            (data.hinges, data.membranes, ClothTopology::default(), SolverWorkspace::default(), RenderMesh::default()),
         ));
     }
     world.spawn_batch(entities);
 
-    world.insert_resource(StepSettings {
-        dt: time.dt,
-        substeps: time.substeps,
-    });
+    world.insert_resource(StepSettings { dt: time.dt, substeps: time.substeps });
     world.insert_resource(Gravity(scene.gravity));
     world.insert_resource(AirSettings(Air {
         drag: scene.air.drag,
         wind: scene.air.wind,
         wind_drag: scene.air.wind_drag,
-        gust: scene.air.gust.map(|g| Gust {
-            amplitude: g.amplitude,
-            period_s: g.period_s,
-        }),
+        gust: scene.air.gust.map(|g| Gust { amplitude: g.amplitude, period_s: g.period_s }),
+        area_damping: scene.air.area_damping,
     }));
+    let rayleigh = match scene.solver.rayleigh {
+        Some(RayleighDesc::Coefficients { alpha, beta }) => Rayleigh { alpha, beta },
+        Some(RayleighDesc::Critical { omega1, omega2 }) => Rayleigh::from_frequencies(omega1, omega2, 1.0),
+        None => Rayleigh::default(),
+    };
     world.insert_resource(SolverSettings {
         integrator: scene.solver.integrator,
-        tolerance: scene.solver.tolerance,
+        method: MethodSettings {
+            tolerance: scene.solver.tolerance,
+            implicit: ImplicitSettings {
+                theta: scene.solver.theta,
+                rayleigh,
+                cg_tolerance: scene.solver.cg_tolerance,
+                cg_max_iterations: scene.solver.cg_max_iterations,
+                newton_iterations: scene.solver.newton_iterations,
+            },
+        },
     });
-    world.insert_resource(Ground(scene.ground.enabled.then_some(GroundPlane {
-        height: scene.ground.height,
-        friction: scene.ground.friction,
-    })));
-    world.insert_resource(DivergenceLimit {
-        max_strain: scene.divergence.max_strain,
-    });
+    world.insert_resource(Ground(
+        scene.ground.enabled.then_some(GroundPlane { height: scene.ground.height, friction: scene.ground.friction }),
+    ));
+    world.insert_resource(DivergenceLimit { max_strain: scene.divergence.max_strain });
     world.insert_resource(SimClock::default());
     world.insert_resource(HealthReport::default());
     world.insert_resource(Probes::default());
@@ -178,15 +142,9 @@ pub fn spawn_scene(
             at_s: f64::from(edit.at_s),
             cloth: edit.cloth.clone(),
             action: match &edit.action {
-                EditActionDesc::Tear {
-                    point,
-                    normal,
-                    radius,
-                } => EditAction::Tear(Cut {
-                    point: *point,
-                    normal: *normal,
-                    radius: *radius,
-                }),
+                EditActionDesc::Tear { point, normal, radius } => {
+                    EditAction::Tear(Cut { point: *point, normal: *normal, radius: *radius })
+                }
                 EditActionDesc::Pin(selections) => EditAction::Pin(selections.clone()),
                 EditActionDesc::Unpin(selections) => EditAction::Unpin(selections.clone()),
             },

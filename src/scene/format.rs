@@ -59,6 +59,9 @@ pub struct AirDesc {
     pub wind_drag: f32,
     /// Periodic gusts.
     pub gust: Option<GustDesc>,
+    /// Linear air damping per unit area η [kg/(m²·s)] (Zheng uses 2–3 times the areal
+    /// density): each particle feels `−η a v` for the area `a` it represents.
+    pub area_damping: f32,
 }
 
 /// Sinusoidal gusts.
@@ -84,6 +87,16 @@ pub struct SolverDesc {
     pub substeps: Option<u32>,
     /// Relative error tolerance of `Rk45` [-].
     pub tolerance: f32,
+    /// θ of `Newmark`, in [0.5, 1] (0.5: constant average acceleration, Bricis's choice).
+    pub theta: f32,
+    /// Rayleigh damping `C = αM + βK` of the implicit methods.
+    pub rayleigh: Option<RayleighDesc>,
+    /// Relative residual at which the implicit methods' conjugate gradients stop [-].
+    pub cg_tolerance: f32,
+    /// Iteration cap of the conjugate gradients.
+    pub cg_max_iterations: u32,
+    /// Newton iterations per implicit step (1: linearly implicit).
+    pub newton_iterations: u32,
 }
 
 impl Default for SolverDesc {
@@ -93,8 +106,33 @@ impl Default for SolverDesc {
             dt: None,
             substeps: None,
             tolerance: 1e-4,
+            theta: 0.5,
+            rayleigh: None,
+            cg_tolerance: 1e-4,
+            cg_max_iterations: 500,
+            newton_iterations: 1,
         }
     }
+}
+
+/// Rayleigh damping, by its coefficients or by two frequencies to damp critically.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum RayleighDesc {
+    /// `C = alpha M + beta K`: α [1/s], β [s].
+    Coefficients {
+        /// Mass-proportional coefficient [1/s].
+        alpha: f32,
+        /// Stiffness-proportional coefficient [s].
+        beta: f32,
+    },
+    /// The α, β that damp both angular frequencies [rad/s] critically (Bricis: 0.3 and 0.9
+    /// give α = 0.45, β = 1.667).
+    Critical {
+        /// First angular frequency [rad/s].
+        omega1: f32,
+        /// Second angular frequency [rad/s].
+        omega2: f32,
+    },
 }
 
 /// Steps per frame when a scene gives neither `dt` nor `substeps`.
@@ -114,11 +152,7 @@ pub struct TimeDesc {
 
 impl Default for TimeDesc {
     fn default() -> Self {
-        Self {
-            fps: 60.0,
-            duration_s: None,
-            frames: None,
-        }
+        Self { fps: 60.0, duration_s: None, frames: None }
     }
 }
 
@@ -189,11 +223,7 @@ pub struct GroundDesc {
 
 impl Default for GroundDesc {
     fn default() -> Self {
-        Self {
-            enabled: false,
-            height: 0.0,
-            friction: 0.5,
-        }
+        Self { enabled: false, height: 0.0, friction: 0.5 }
     }
 }
 
@@ -220,11 +250,7 @@ pub struct OutputDesc {
 
 impl Default for OutputDesc {
     fn default() -> Self {
-        Self {
-            directory: None,
-            every: 1,
-            formats: vec![FrameFormat::Obj],
-        }
+        Self { directory: None, every: 1, formats: vec![FrameFormat::Obj] }
     }
 }
 

@@ -64,26 +64,15 @@ impl std::fmt::Display for Location {
 impl SceneError {
     /// An invalid value at `field`.
     pub fn invalid(field: impl Into<String>, message: impl Into<String>) -> Self {
-        SceneError::Invalid {
-            location: None,
-            field: field.into(),
-            message: message.into(),
-        }
+        SceneError::Invalid { location: None, field: field.into(), message: message.into() }
     }
 
     /// Attaches the file, and the line and column of the field in `text`, to an
     /// [`SceneError::Invalid`] that has none yet.
     pub fn located(self, path: &Path, text: &str) -> Self {
         match self {
-            SceneError::Invalid {
-                location: None,
-                field,
-                message,
-            } => SceneError::Invalid {
-                location: Some(Location {
-                    path: path.display().to_string(),
-                    line_column: locate_field(text, &field),
-                }),
+            SceneError::Invalid { location: None, field, message } => SceneError::Invalid {
+                location: Some(Location { path: path.display().to_string(), line_column: locate_field(text, &field) }),
                 field,
                 message,
             },
@@ -112,16 +101,10 @@ impl SceneFile {
 
 /// Reads, parses and validates the scene at `path`.
 pub fn load_scene(path: &Path) -> Result<SceneFile, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-        path: path.display().to_string(),
-        source,
-    })?;
+    let text =
+        std::fs::read_to_string(path).map_err(|source| SceneError::Io { path: path.display().to_string(), source })?;
     let scene = parse_scene(&text, path)?;
-    Ok(SceneFile {
-        scene,
-        path: path.to_owned(),
-        text,
-    })
+    Ok(SceneFile { scene, path: path.to_owned(), text })
 }
 
 /// Parses and validates scene text; `path` is only used in messages.
@@ -153,9 +136,9 @@ pub fn locate_field(text: &str, field: &str) -> Option<(usize, usize)> {
         let (open, close) = enter_container(&tokens, at)?;
         at = match segment {
             Segment::Name(name) => {
-                let ident = item_starts(&tokens, open, close).into_iter().find(|&i| {
-                    tokens[i].text == name && tokens.get(i + 1).is_some_and(|t| t.text == ":")
-                })?;
+                let ident = item_starts(&tokens, open, close)
+                    .into_iter()
+                    .find(|&i| tokens[i].text == name && tokens.get(i + 1).is_some_and(|t| t.text == ":"))?;
                 found = Some(ident);
                 ident + 2
             }
@@ -177,9 +160,7 @@ enum Segment<'a> {
 fn field_segments(field: &str) -> Vec<Segment<'_>> {
     let mut segments = Vec::new();
     for part in field.split('.') {
-        let (name, indices) = part
-            .split_once('[')
-            .map_or((part, ""), |(n, rest)| (n, rest));
+        let (name, indices) = part.split_once('[').map_or((part, ""), |(n, rest)| (n, rest));
         if !name.is_empty() {
             segments.push(Segment::Name(name));
         }
@@ -221,9 +202,7 @@ fn tokenize(text: &str) -> Vec<Token<'_>> {
             }
             continue;
         } else if text[i..].starts_with("/*") {
-            let end = text[i + 2..]
-                .find("*/")
-                .map_or(bytes.len(), |e| i + 2 + e + 2);
+            let end = text[i + 2..].find("*/").map_or(bytes.len(), |e| i + 2 + e + 2);
             for (k, b) in bytes[i..end].iter().enumerate() {
                 if *b == b'\n' {
                     line += 1;
@@ -241,18 +220,11 @@ fn tokenize(text: &str) -> Vec<Token<'_>> {
         } else if b"()[]{}:,".contains(&c) {
             i += 1;
         } else {
-            while i < bytes.len()
-                && !bytes[i].is_ascii_whitespace()
-                && !b"()[]{}:,\"".contains(&bytes[i])
-            {
+            while i < bytes.len() && !bytes[i].is_ascii_whitespace() && !b"()[]{}:,\"".contains(&bytes[i]) {
                 i += 1;
             }
         }
-        tokens.push(Token {
-            text: &text[start..i],
-            line,
-            column,
-        });
+        tokens.push(Token { text: &text[start..i], line, column });
     }
     tokens
 }
@@ -260,11 +232,7 @@ fn tokenize(text: &str) -> Vec<Token<'_>> {
 /// Skips a struct or variant name (and an explicit `Some(`) at `at` and returns the
 /// indices of the opening and closing brackets of the container that follows.
 fn enter_container(tokens: &[Token<'_>], mut at: usize) -> Option<(usize, usize)> {
-    let is_open = |k: usize| {
-        tokens
-            .get(k)
-            .is_some_and(|t| matches!(t.text, "(" | "[" | "{"))
-    };
+    let is_open = |k: usize| tokens.get(k).is_some_and(|t| matches!(t.text, "(" | "[" | "{"));
     if tokens.get(at)?.text == "Some" && is_open(at + 1) {
         at += 2;
     }
@@ -320,10 +288,7 @@ mod tests {
     #[test]
     fn fields_are_found_through_structs_and_lists() {
         assert_eq!(locate_field(TEXT, "name"), Some((2, 3)));
-        assert_eq!(
-            locate_field(TEXT, "cloths[1].material.density"),
-            Some((7, 18))
-        );
+        assert_eq!(locate_field(TEXT, "cloths[1].material.density"), Some((7, 18)));
         assert_eq!(locate_field(TEXT, "cloths[0].material"), Some((4, 17)));
         assert_eq!(locate_field(TEXT, "cloths[1]"), Some((5, 5)));
         assert_eq!(locate_field(TEXT, "cloths[2]"), None);

@@ -4,9 +4,10 @@
 
 use glam::Vec3;
 
-use super::format::{DEFAULT_SUBSTEPS, EditActionDesc, Scene, ShapeDesc};
+use super::format::{DEFAULT_SUBSTEPS, EditActionDesc, RayleighDesc, Scene, ShapeDesc};
 use super::load::SceneError;
 use crate::builders::pins::PinSelection;
+use crate::components::{BendingLawDesc, MembraneDesc};
 
 /// How a scene's time is cut into frames and steps.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -61,38 +62,22 @@ pub fn time_plan(scene: &Scene) -> Result<TimePlan, SceneError> {
     };
     let frames = match (scene.time.duration_s, scene.time.frames) {
         (Some(_), Some(_)) => {
-            return Err(SceneError::invalid(
-                "time.frames",
-                "give either duration_s or frames, not both",
-            ));
+            return Err(SceneError::invalid("time.frames", "give either duration_s or frames, not both"));
         }
         (None, None) => {
-            return Err(SceneError::invalid(
-                "time",
-                "give the length of the run as duration_s or frames",
-            ));
+            return Err(SceneError::invalid("time", "give the length of the run as duration_s or frames"));
         }
-        (Some(duration), None) => (positive("time.duration_s", duration)? * fps)
-            .round()
-            .max(1.0) as u32,
+        (Some(duration), None) => (positive("time.duration_s", duration)? * fps).round().max(1.0) as u32,
         (None, Some(0)) => return Err(SceneError::invalid("time.frames", "must be at least 1")),
         (None, Some(frames)) => frames,
     };
-    Ok(TimePlan {
-        fps,
-        dt: frame_time / substeps as f32,
-        substeps,
-        frames,
-    })
+    Ok(TimePlan { fps, dt: frame_time / substeps as f32, substeps, frames })
 }
 
 /// Checks everything about `scene` that can be checked without building it.
 pub fn validate(scene: &Scene) -> Result<(), SceneError> {
     if scene.name.is_empty()
-        || !scene
-            .name
-            .chars()
-            .all(|c| c.is_alphanumeric() || "-_.".contains(c))
+        || !scene.name.chars().all(|c| c.is_alphanumeric() || "-_.".contains(c))
         || scene.name.starts_with('.')
     {
         return Err(SceneError::invalid(
@@ -108,6 +93,32 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         finite("air.gust.amplitude", gust.amplitude)?;
         positive("air.gust.period_s", gust.period_s)?;
     }
+    non_negative("air.area_damping", scene.air.area_damping)?;
+    let theta = finite("solver.theta", scene.solver.theta)?;
+    if !(0.5..=1.0).contains(&theta) {
+        return Err(SceneError::invalid(
+            "solver.theta",
+            format!("{theta} is outside [0.5, 1], where the θ-method is stable"),
+        ));
+    }
+    match scene.solver.rayleigh {
+        Some(RayleighDesc::Coefficients { alpha, beta }) => {
+            non_negative("solver.rayleigh.alpha", alpha)?;
+            non_negative("solver.rayleigh.beta", beta)?;
+        }
+        Some(RayleighDesc::Critical { omega1, omega2 }) => {
+            positive("solver.rayleigh.omega1", omega1)?;
+            positive("solver.rayleigh.omega2", omega2)?;
+        }
+        None => {}
+    }
+    let cg = positive("solver.cg_tolerance", scene.solver.cg_tolerance)?;
+    if scene.solver.newton_iterations == 0 {
+        return Err(SceneError::invalid("solver.newton_iterations", "must be at least 1"));
+    }
+    if cg >= 1.0 || scene.solver.cg_max_iterations == 0 {
+        return Err(SceneError::invalid("solver.cg_tolerance", "needs a tolerance below 1 and at least one iteration"));
+    }
     let tolerance = positive("solver.tolerance", scene.solver.tolerance)?;
     if tolerance >= 1.0 {
         return Err(SceneError::invalid(
@@ -118,20 +129,14 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
     time_plan(scene)?;
 
     if scene.cloths.is_empty() {
-        return Err(SceneError::invalid(
-            "cloths",
-            "a scene needs at least one cloth",
-        ));
+        return Err(SceneError::invalid("cloths", "a scene needs at least one cloth"));
     }
     for (index, cloth) in scene.cloths.iter().enumerate() {
         let field = |name: &str| format!("cloths[{index}].{name}");
         if cloth.name.is_empty() {
             return Err(SceneError::invalid(field("name"), "must not be empty"));
         }
-        if scene.cloths[..index]
-            .iter()
-            .any(|other| other.name == cloth.name)
-        {
+        if scene.cloths[..index].iter().any(|other| other.name == cloth.name) {
             return Err(SceneError::invalid(
                 field("name"),
                 format!("`{}` names two cloths; names must be unique", cloth.name),
@@ -150,31 +155,59 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
             }
             ShapeDesc::Mesh { path } => {
                 if path.is_empty() {
-                    return Err(SceneError::invalid(
-                        field("shape.path"),
-                        "must name an OBJ file",
-                    ));
+                    return Err(SceneError::invalid(field("shape.path"), "must name an OBJ file"));
                 }
             }
         }
         finite_vec(&field("placement.translation"), cloth.placement.translation)?;
-        finite_vec(
-            &field("placement.rotation_deg"),
-            cloth.placement.rotation_deg,
-        )?;
+        finite_vec(&field("placement.rotation_deg"), cloth.placement.rotation_deg)?;
         positive(&field("placement.scale"), cloth.placement.scale)?;
         let material = &cloth.material;
         positive(&field("material.density"), material.density).map_err(|_| {
             SceneError::invalid(field("material.density"), format!("{} kg/m² would give particles no or negative mass; areal densities of fabric are about 0.05 to 0.5 kg/m²", material.density))
         })?;
-        for (family, c) in [
-            ("stretch", material.stretch),
-            ("shear", material.shear),
-            ("bend", material.bend),
-        ] {
-            non_negative(&field(&format!("material.{family}.stiffness")), c.stiffness)?;
-            non_negative(&field(&format!("material.{family}.damping")), c.damping)?;
+        for (family, c) in [("stretch", material.stretch), ("shear", material.shear), ("bend", material.bend)] {
+            if let Some(c) = c {
+                non_negative(&field(&format!("material.{family}.stiffness")), c.stiffness)?;
+                non_negative(&field(&format!("material.{family}.damping")), c.damping)?;
+            }
         }
+        if material.stretch.is_none() && material.membrane.is_none() {
+            return Err(SceneError::invalid(
+                field("material"),
+                "the cloth resists no stretching: give stretch springs or a membrane",
+            ));
+        }
+        match material.membrane {
+            Some(MembraneDesc::Anisotropic { d1, d2, d3, d4 }) => {
+                positive(&field("material.membrane.d1"), d1)?;
+                positive(&field("material.membrane.d2"), d2)?;
+                finite(&field("material.membrane.d3"), d3)?;
+                positive(&field("material.membrane.d4"), d4)?;
+                if d3 * d3 >= d1 * d2 {
+                    return Err(SceneError::invalid(
+                        field("material.membrane.d3"),
+                        format!("d3² must be below d1·d2 ({}) for the membrane to be stable", d1 * d2),
+                    ));
+                }
+            }
+            Some(MembraneDesc::Isotropic { young, poisson }) => {
+                positive(&field("material.membrane.young"), young)?;
+                let poisson = non_negative(&field("material.membrane.poisson"), poisson)?;
+                if poisson >= 0.5 {
+                    return Err(SceneError::invalid(field("material.membrane.poisson"), "must be below 0.5"));
+                }
+            }
+            None => {}
+        }
+        if let Some(bending) = material.bending {
+            non_negative(&field("material.bending.warp"), bending.warp)?;
+            non_negative(&field("material.bending.weft"), bending.weft)?;
+            if let BendingLawDesc::Zheng { kappa0 } = bending.law {
+                positive(&field("material.bending.law.kappa0"), kappa0)?;
+            }
+        }
+        finite(&field("material.grain_deg"), material.grain_deg)?;
         finite_vec(&field("velocity"), cloth.velocity)?;
         for (k, force) in cloth.user_forces.iter().enumerate() {
             finite_vec(&field(&format!("user_forces[{k}].force")), force.force)?;
@@ -187,10 +220,7 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
     finite("ground.height", scene.ground.height)?;
     non_negative("ground.friction", scene.ground.friction)?;
     if scene.output.every == 0 {
-        return Err(SceneError::invalid(
-            "output.every",
-            "must be at least 1 (1 writes every frame)",
-        ));
+        return Err(SceneError::invalid("output.every", "must be at least 1 (1 writes every frame)"));
     }
     positive("divergence.max_strain", scene.divergence.max_strain)?;
 
@@ -198,24 +228,14 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         let field = |name: &str| format!("edits[{k}].{name}");
         non_negative(&field("at_s"), edit.at_s)?;
         if !scene.cloths.iter().any(|c| c.name == edit.cloth) {
-            return Err(SceneError::invalid(
-                field("cloth"),
-                format!("no cloth is named `{}`", edit.cloth),
-            ));
+            return Err(SceneError::invalid(field("cloth"), format!("no cloth is named `{}`", edit.cloth)));
         }
         match &edit.action {
-            EditActionDesc::Tear {
-                point,
-                normal,
-                radius,
-            } => {
+            EditActionDesc::Tear { point, normal, radius } => {
                 finite_vec(&field("action.point"), *point)?;
                 finite_vec(&field("action.normal"), *normal)?;
                 if *normal == Vec3::ZERO {
-                    return Err(SceneError::invalid(
-                        field("action.normal"),
-                        "must not be zero",
-                    ));
+                    return Err(SceneError::invalid(field("action.normal"), "must not be zero"));
                 }
                 if let Some(radius) = radius {
                     positive(&field("action.radius"), *radius)?;
@@ -236,10 +256,7 @@ fn check_selection(field: &str, selection: &PinSelection) -> Result<(), SceneErr
         finite_vec(field, *min)?;
         finite_vec(field, *max)?;
         if !min.cmple(*max).all() {
-            return Err(SceneError::invalid(
-                field,
-                format!("box min {min} must be below max {max} on every axis"),
-            ));
+            return Err(SceneError::invalid(field, format!("box min {min} must be below max {max} on every axis")));
         }
     }
     Ok(())
@@ -249,10 +266,7 @@ fn finite(field: &str, value: f32) -> Result<f32, SceneError> {
     if value.is_finite() {
         Ok(value)
     } else {
-        Err(SceneError::invalid(
-            field,
-            format!("{value} is not a finite number"),
-        ))
+        Err(SceneError::invalid(field, format!("{value} is not a finite number")))
     }
 }
 
@@ -260,10 +274,7 @@ fn positive(field: &str, value: f32) -> Result<f32, SceneError> {
     if finite(field, value)? > 0.0 {
         Ok(value)
     } else {
-        Err(SceneError::invalid(
-            field,
-            format!("must be greater than 0, got {value}"),
-        ))
+        Err(SceneError::invalid(field, format!("must be greater than 0, got {value}")))
     }
 }
 
@@ -271,10 +282,7 @@ fn non_negative(field: &str, value: f32) -> Result<f32, SceneError> {
     if finite(field, value)? >= 0.0 {
         Ok(value)
     } else {
-        Err(SceneError::invalid(
-            field,
-            format!("must not be negative, got {value}"),
-        ))
+        Err(SceneError::invalid(field, format!("must not be negative, got {value}")))
     }
 }
 
@@ -282,9 +290,6 @@ fn finite_vec(field: &str, value: Vec3) -> Result<Vec3, SceneError> {
     if value.is_finite() {
         Ok(value)
     } else {
-        Err(SceneError::invalid(
-            field,
-            format!("{value} has a non-finite component"),
-        ))
+        Err(SceneError::invalid(field, format!("{value} has a non-finite component")))
     }
 }

@@ -44,19 +44,12 @@ mod tests {
 
     #[test]
     fn a_particle_below_the_ground_is_put_back_and_slowed_by_friction() {
-        let plane = GroundPlane {
-            height: 0.0,
-            friction: 0.5,
-        };
+        let plane = GroundPlane { height: 0.0, friction: 0.5 };
         let mut x = [Vec3::new(0.0, -0.01, 0.0), Vec3::new(0.0, 1.0, 0.0)];
         let mut v = [Vec3::new(2.0, -1.0, 0.0), Vec3::new(0.0, -1.0, 0.0)];
         assert_eq!(resolve_ground(plane, &mut x, &mut v), 1);
         assert_eq!(x[0].y, 0.0);
         assert!((v[0] - Vec3::new(1.5, 0.0, 0.0)).length() < 1e-6);
-        assert_eq!(
-            v[1],
-            Vec3::new(0.0, -1.0, 0.0),
-            "particles above the plane are untouched"
-        );
+        assert_eq!(v[1], Vec3::new(0.0, -1.0, 0.0), "particles above the plane are untouched");
     }
 }

@@ -5,8 +5,10 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::PARALLEL_MIN_LEN;
+use super::elements::{BlockMatrix, BlockPattern, SpringElement};
+use super::implicit::LinearDynamics;
 use super::integrate::Dynamics;
-use crate::components::{ClothTopology, Springs};
+use crate::components::{BendingHinges, ClothTopology, MembraneTriangles, Springs};
 
 /// Air around the cloth.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -22,6 +24,9 @@ pub struct Air {
     pub wind_drag: f32,
     /// Optional periodic gusts on top of the mean wind.
     pub gust: Option<Gust>,
+    /// Linear air damping per unit area η [kg/(m²·s)] (Zheng §2.2.3): each particle feels
+    /// `−η a v` for the area `a` it represents.
+    pub area_damping: f32,
 }
 
 /// A sinusoidal modulation of the wind speed.
@@ -37,26 +42,10 @@ impl Air {
     /// Wind velocity at time `t` [s].
     pub fn wind_at(&self, t: f32) -> Vec3 {
         match self.gust {
-            Some(gust) => {
-                self.wind
-                    * (1.0 + gust.amplitude * (std::f32::consts::TAU * t / gust.period_s).sin())
-            }
+            Some(gust) => self.wind * (1.0 + gust.amplitude * (std::f32::consts::TAU * t / gust.period_s).sin()),
             None => self.wind,
         }
     }
-}
-
-/// Force on particle `i` of a damped Hooke spring from `i` to `j` (Durupınar eq. 3.1.1.1):
-/// `f_i = −[k (|d| − r) + k_d (v_i − v_j)·d̂] d̂` with `d = x_i − x_j`; `f_j = −f_i`.
-#[inline]
-pub fn spring_force(xi: Vec3, xj: Vec3, vi: Vec3, vj: Vec3, rest: f32, k: f32, kd: f32) -> Vec3 {
-    let d = xi - xj;
-    let length = d.length();
-    if length <= f32::EPSILON * rest {
-        return Vec3::ZERO;
-    }
-    let n = d / length;
-    -(k * (length - rest) + kd * (vi - vj).dot(n)) * n
 }
 
 /// Wind force on each vertex of a triangle [N]: a third of the normal drag on the triangle.
@@ -79,6 +68,8 @@ pub fn triangle_wind_force(x: [Vec3; 3], v: [Vec3; 3], wind: Vec3, wind_drag: f3
 pub struct ForceScratch {
     spring: Vec<Vec3>,
     triangle: Vec<Vec3>,
+    hinge: Vec<[Vec3; 4]>,
+    membrane: Vec<[Vec3; 3]>,
 }
 
 /// Everything that exerts force on one cloth, borrowed for one evaluation.
@@ -86,11 +77,17 @@ pub struct ForceScratch {
 pub struct ForceModel<'a> {
     /// Inverse masses [1/kg] (not zeroed for pins: pinned particles feel weight too).
     pub inv_mass: &'a [f32],
+    /// Areal density [kg/m²], to turn damping per area into a rate.
+    pub density: f32,
     /// The cloth's springs.
     pub springs: &'a Springs,
     /// The cloth's triangles, for wind.
     pub triangles: &'a [[u32; 3]],
-    /// Incidence rows of springs and triangles.
+    /// Bending hinges.
+    pub hinges: &'a BendingHinges,
+    /// Membrane triangles.
+    pub membranes: &'a MembraneTriangles,
+    /// Incidence rows and derivative pattern.
     pub topology: &'a ClothTopology,
     /// Gravitational acceleration [m/s²].
     pub gravity: Vec3,
@@ -101,98 +98,141 @@ pub struct ForceModel<'a> {
 }
 
 impl ForceModel<'_> {
+    fn spring(&self, s: usize) -> SpringElement {
+        SpringElement {
+            rest: self.springs.rest_length[s],
+            stiffness: self.springs.stiffness[s],
+            damping: self.springs.damping[s],
+        }
+    }
+
+    /// Linear damping rate [1/s]: the mass-proportional drag plus the damping per area
+    /// divided by the areal density (`η / ρ`, Zheng §2.2.3).
+    pub fn damping_rate(&self) -> f32 {
+        self.air.drag + self.air.area_damping / self.density
+    }
+
     /// Total force on every particle at state `(x, v)` and time `t` [s], written to `out`.
-    pub fn eval(
-        &self,
-        x: &[Vec3],
-        v: &[Vec3],
-        t: f32,
-        scratch: &mut ForceScratch,
-        out: &mut [Vec3],
-    ) {
-        let springs = self.springs;
-        scratch.spring.resize(springs.len(), Vec3::ZERO);
-        scratch
-            .spring
-            .par_iter_mut()
-            .with_min_len(PARALLEL_MIN_LEN)
-            .enumerate()
-            .for_each(|(s, f)| {
-                let [i, j] = springs.pairs[s].map(|p| p as usize);
-                *f = spring_force(
-                    x[i],
-                    x[j],
-                    v[i],
-                    v[j],
-                    springs.rest_length[s],
-                    springs.stiffness[s],
-                    springs.damping[s],
-                );
-            });
+    pub fn eval(&self, x: &[Vec3], v: &[Vec3], t: f32, scratch: &mut ForceScratch, out: &mut [Vec3]) {
+        scratch.spring.resize(self.springs.len(), Vec3::ZERO);
+        scratch.spring.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(s, f)| {
+            let [i, j] = self.springs.pairs[s].map(|p| p as usize);
+            *f = self.spring(s).force(x[i], x[j], v[i], v[j]);
+        });
+
+        let law = self.hinges.law;
+        scratch.hinge.resize(self.hinges.vertices.len(), [Vec3::ZERO; 4]);
+        scratch.hinge.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(h, f)| {
+            *f = self.hinges.elements[h].forces(law, self.hinges.vertices[h].map(|p| x[p as usize]));
+        });
+
+        let material = &self.membranes.material;
+        scratch.membrane.resize(self.membranes.indices.len(), [Vec3::ZERO; 3]);
+        scratch.membrane.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(m, f)| {
+            *f = self.membranes.elements[m].forces(material, self.membranes.indices[m].map(|p| x[p as usize]));
+        });
 
         let wind = self.air.wind_at(t);
         let with_wind = self.air.wind_drag > 0.0;
-        scratch
-            .triangle
-            .resize(if with_wind { self.triangles.len() } else { 0 }, Vec3::ZERO);
-        scratch
-            .triangle
-            .par_iter_mut()
-            .with_min_len(PARALLEL_MIN_LEN)
-            .enumerate()
-            .for_each(|(t, f)| {
-                let tri = self.triangles[t].map(|p| p as usize);
-                *f = triangle_wind_force(
-                    tri.map(|p| x[p]),
-                    tri.map(|p| v[p]),
-                    wind,
-                    self.air.wind_drag,
-                );
-            });
+        scratch.triangle.resize(if with_wind { self.triangles.len() } else { 0 }, Vec3::ZERO);
+        scratch.triangle.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(t, f)| {
+            let tri = self.triangles[t].map(|p| p as usize);
+            *f = triangle_wind_force(tri.map(|p| x[p]), tri.map(|p| v[p]), wind, self.air.wind_drag);
+        });
 
         let scratch = &*scratch;
-        out.par_iter_mut()
-            .with_min_len(PARALLEL_MIN_LEN)
-            .enumerate()
-            .for_each(|(i, f)| {
-                let mass = 1.0 / self.inv_mass[i];
-                let mut total = mass * (self.gravity - self.air.drag * v[i]);
-                for &s in self.topology.particle_springs.row(i) {
-                    let sf = scratch.spring[s as usize];
-                    total += if springs.pairs[s as usize][0] as usize == i {
-                        sf
-                    } else {
-                        -sf
-                    };
+        let rate = self.damping_rate();
+        let topology = self.topology;
+        out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, f)| {
+            let mass = 1.0 / self.inv_mass[i];
+            let mut total = mass * (self.gravity - rate * v[i]);
+            for &s in topology.particle_springs.row(i) {
+                let sf = scratch.spring[s as usize];
+                total += if self.springs.pairs[s as usize][0] as usize == i { sf } else { -sf };
+            }
+            for &corner in topology.particle_hinges.row(i) {
+                total += scratch.hinge[corner as usize / 4][corner as usize % 4];
+            }
+            for &corner in topology.particle_membranes.row(i) {
+                total += scratch.membrane[corner as usize / 3][corner as usize % 3];
+            }
+            if with_wind {
+                for &t in topology.particle_triangles.row(i) {
+                    total += scratch.triangle[t as usize];
                 }
-                if with_wind {
-                    for &t in self.topology.particle_triangles.row(i) {
-                        total += scratch.triangle[t as usize];
-                    }
-                }
-                *f = total;
-            });
+            }
+            *f = total;
+        });
         for &(particle, force) in self.user_forces {
             out[particle as usize] += force;
         }
     }
 
+    /// Forces (as [`ForceModel::eval`]) and the derivatives ∂f/∂x and ∂f/∂v over the
+    /// topology's pattern. With `definite`, each element gives the semi-definite variant of
+    /// its stiffness that conjugate gradients need. Wind is left out of the derivatives:
+    /// implicit solvers treat it explicitly.
+    pub fn assemble(
+        &self,
+        x: &[Vec3],
+        v: &[Vec3],
+        t: f32,
+        definite: bool,
+        scratch: &mut ForceScratch,
+        out: &mut [Vec3],
+        dfdx: &mut BlockMatrix,
+        dfdv: &mut BlockMatrix,
+    ) {
+        self.eval(x, v, t, scratch, out);
+        let topology = self.topology;
+        let pattern = &topology.pattern;
+        dfdx.reset(pattern);
+        dfdv.reset(pattern);
+        for (s, slots) in topology.spring_slots.iter().enumerate() {
+            let [i, j] = self.springs.pairs[s].map(|p| p as usize);
+            let spring = self.spring(s);
+            let k = spring.position_jacobian(x[i], x[j], v[i], v[j], definite);
+            dfdx.add_local(slots, &[[k, -k], [-k, k]]);
+            if spring.damping > 0.0 {
+                let d = spring.velocity_jacobian(x[i], x[j]);
+                dfdv.add_local(slots, &[[d, -d], [-d, d]]);
+            }
+        }
+        let law = self.hinges.law;
+        for (h, slots) in topology.hinge_slots.iter().enumerate() {
+            let corners = self.hinges.vertices[h].map(|p| x[p as usize]);
+            dfdx.add_local(slots, &self.hinges.elements[h].position_jacobian(law, corners, definite));
+        }
+        let material = &self.membranes.material;
+        for (m, slots) in topology.membrane_slots.iter().enumerate() {
+            let corners = self.membranes.indices[m].map(|p| x[p as usize]);
+            dfdx.add_local(slots, &self.membranes.elements[m].position_jacobian(material, corners, definite));
+        }
+        let rate = self.damping_rate();
+        if rate > 0.0 {
+            dfdv.add_diagonal(pattern, |i| -rate / self.inv_mass[i]);
+        }
+    }
+
     /// Potential energy at positions `x` [J]: gravitational (zero at the origin) plus the
-    /// elastic energy `½ k (|d| − r)²` of every spring.
+    /// elastic energy of every spring, hinge and membrane triangle.
     pub fn potential_energy(&self, x: &[Vec3]) -> f64 {
-        let gravity: f64 = x
-            .iter()
-            .zip(self.inv_mass)
-            .map(|(p, w)| -f64::from(self.gravity.dot(*p) / w))
-            .sum();
-        let elastic: f64 = (0..self.springs.len())
+        let gravity: f64 = x.iter().zip(self.inv_mass).map(|(p, w)| -f64::from(self.gravity.dot(*p) / w)).sum();
+        let springs: f64 = (0..self.springs.len())
             .map(|s| {
                 let [i, j] = self.springs.pairs[s].map(|p| p as usize);
-                let stretch = f64::from((x[i] - x[j]).length() - self.springs.rest_length[s]);
-                0.5 * f64::from(self.springs.stiffness[s]) * stretch * stretch
+                f64::from(self.spring(s).energy(x[i], x[j]))
             })
             .sum();
-        gravity + elastic
+        let law = self.hinges.law;
+        let hinges: f64 = (self.hinges.vertices.iter().zip(&self.hinges.elements))
+            .map(|(h, e)| f64::from(e.energy(law, h.map(|p| x[p as usize]))))
+            .sum();
+        let material = &self.membranes.material;
+        let membranes: f64 = (self.membranes.indices.iter().zip(&self.membranes.elements))
+            .map(|(t, e)| f64::from(e.energy(material, t.map(|p| x[p as usize]))))
+            .sum();
+        gravity + springs + hinges + membranes
     }
 }
 
@@ -217,37 +257,35 @@ impl Dynamics for ClothDynamics<'_> {
     }
 }
 
+impl LinearDynamics for ClothDynamics<'_> {
+    fn pattern(&self) -> &BlockPattern {
+        &self.model.topology.pattern
+    }
+
+    fn mass(&self, i: usize) -> f32 {
+        1.0 / self.model.inv_mass[i]
+    }
+
+    fn is_free(&self, i: usize) -> bool {
+        self.free_inv_mass[i] > 0.0
+    }
+
+    fn linearize(
+        &mut self,
+        x: &[Vec3],
+        v: &[Vec3],
+        t: f32,
+        force: &mut [Vec3],
+        dfdx: &mut BlockMatrix,
+        dfdv: &mut BlockMatrix,
+    ) {
+        self.model.assemble(x, v, t, true, self.scratch, force, dfdx, dfdv);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn stretched_spring_pulls_with_hookes_law() {
-        let f = spring_force(
-            Vec3::new(1.5, 0.0, 0.0),
-            Vec3::ZERO,
-            Vec3::ZERO,
-            Vec3::ZERO,
-            1.0,
-            10.0,
-            0.0,
-        );
-        assert!((f - Vec3::new(-5.0, 0.0, 0.0)).length() < 1e-6);
-    }
-
-    #[test]
-    fn spring_damping_opposes_relative_velocity_along_the_spring_only() {
-        let f = spring_force(
-            Vec3::X,
-            Vec3::ZERO,
-            Vec3::new(2.0, 3.0, 0.0),
-            Vec3::ZERO,
-            1.0,
-            0.0,
-            0.5,
-        );
-        assert!((f - Vec3::new(-1.0, 0.0, 0.0)).length() < 1e-6);
-    }
 
     #[test]
     fn wind_on_a_facing_triangle_is_drag_times_area_times_speed_squared() {
@@ -263,14 +301,7 @@ mod tests {
 
     #[test]
     fn gusts_modulate_the_wind_around_its_mean() {
-        let air = Air {
-            wind: Vec3::X,
-            gust: Some(Gust {
-                amplitude: 0.5,
-                period_s: 2.0,
-            }),
-            ..Air::default()
-        };
+        let air = Air { wind: Vec3::X, gust: Some(Gust { amplitude: 0.5, period_s: 2.0 }), ..Air::default() };
         assert!((air.wind_at(0.5) - Vec3::new(1.5, 0.0, 0.0)).length() < 1e-6);
         assert!((air.wind_at(1.5) - Vec3::new(0.5, 0.0, 0.0)).length() < 1e-6);
     }

@@ -50,10 +50,7 @@ mod tests {
         let masses = lumped_masses(&positions, &[[0, 1, 2], [0, 2, 3]], 0.3);
         let total: f32 = masses.iter().sum();
         assert!((total - 0.3).abs() < 1e-6);
-        assert!(
-            (masses[0] - 0.1).abs() < 1e-6,
-            "vertex 0 is on both triangles"
-        );
+        assert!((masses[0] - 0.1).abs() < 1e-6, "vertex 0 is on both triangles");
     }
 
     #[test]

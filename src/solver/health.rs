@@ -2,8 +2,8 @@
 
 use glam::Vec3;
 
-use super::probes::spring_strains;
-use crate::components::Springs;
+use super::probes::edge_strains;
+use crate::components::{MembraneTriangles, Springs};
 
 /// What went wrong in a cloth's state.
 #[derive(Debug, Clone, PartialEq)]
@@ -15,11 +15,10 @@ pub enum Unhealthy {
         /// Which quantity: `"position"` or `"velocity"`.
         quantity: &'static str,
     },
-    /// A spring stretched beyond the scene's divergence limit.
+    /// An edge (a spring or a membrane triangle's side) stretched beyond the scene's
+    /// divergence limit.
     Overstretched {
-        /// The most stretched spring.
-        spring: u32,
-        /// Its two particles.
+        /// The edge's two particles.
         particles: [u32; 2],
         /// Its strain (elongation ratio minus one).
         strain: f32,
@@ -32,48 +31,40 @@ impl std::fmt::Display for Unhealthy {
             Unhealthy::NonFinite { particle, quantity } => {
                 write!(f, "particle {particle} has a non-finite {quantity}")
             }
-            Unhealthy::Overstretched {
-                spring,
-                particles,
-                strain,
-            } => write!(
+            Unhealthy::Overstretched { particles, strain } => write!(
                 f,
-                "spring {spring} (particles {} and {}) is stretched to strain {strain:.3}, beyond the divergence limit",
+                "the edge between particles {} and {} is stretched to strain {strain:.3}, beyond the divergence limit",
                 particles[0], particles[1]
             ),
         }
     }
 }
 
-/// Checks positions and velocities for non-finite values, then every spring's strain
-/// against `max_strain`. Reports the first problem found, in particle then spring order.
+/// Checks positions and velocities for non-finite values, then every edge's strain
+/// against `max_strain`. Reports the first problem found: the first bad particle, or the
+/// most stretched edge.
 pub fn check_health(
     x: &[Vec3],
     v: &[Vec3],
+    rest: &[Vec3],
     springs: &Springs,
+    membranes: &MembraneTriangles,
     max_strain: f32,
 ) -> Result<(), Unhealthy> {
     for (quantity, values) in [("position", x), ("velocity", v)] {
         if let Some(particle) = values.iter().position(|p| !p.is_finite()) {
-            return Err(Unhealthy::NonFinite {
-                particle: particle as u32,
-                quantity,
-            });
+            return Err(Unhealthy::NonFinite { particle: particle as u32, quantity });
         }
     }
-    let worst = spring_strains(x, springs).enumerate().fold(
-        None,
-        |worst: Option<(usize, f32)>, (s, strain)| match worst {
-            Some((_, w)) if w >= strain => worst,
-            _ => Some((s, strain)),
-        },
-    );
+    let worst =
+        edge_strains(x, rest, springs, membranes).fold(None, |worst: Option<([u32; 2], f32)>, (pair, strain)| {
+            match worst {
+                Some((_, w)) if w >= strain => worst,
+                _ => Some((pair, strain)),
+            }
+        });
     match worst {
-        Some((spring, strain)) if strain > max_strain => Err(Unhealthy::Overstretched {
-            spring: spring as u32,
-            particles: springs.pairs[spring],
-            strain,
-        }),
+        Some((particles, strain)) if strain > max_strain => Err(Unhealthy::Overstretched { particles, strain }),
         _ => Ok(()),
     }
 }

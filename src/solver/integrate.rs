@@ -1,17 +1,18 @@
 //! Time integrators over the particle state `(x, v)`.
 //!
-//! Every integrator advances one step of length `h` given the acceleration at the start of
-//! the step (computed in the forces stage) and a [`Dynamics`] it may evaluate again at
-//! intermediate states. The explicit Runge–Kutta family (explicit Euler, midpoint, RK4,
-//! RK5 and adaptive RK45) shares one tableau-driven kernel; symplectic Euler and velocity
-//! Verlet are written out. Implicit solvers fit the same shape: they take the same
-//! [`Dynamics`] and differentiate it.
+//! Every explicit integrator advances one step of length `h` given the acceleration at the
+//! start of the step (computed in the forces stage) and a [`Dynamics`] it may evaluate
+//! again at intermediate states. The explicit Runge–Kutta family (explicit Euler, midpoint,
+//! RK4, RK5 and adaptive RK45) shares one tableau-driven kernel; symplectic Euler and
+//! velocity Verlet are written out. The implicit methods ([`super::implicit`]) take the same
+//! system and linearise it.
 
 use glam::Vec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::PARALLEL_MIN_LEN;
+use super::implicit::{ImplicitSettings, ImplicitWorkspace, LinearDynamics, Rayleigh, implicit_step};
 
 /// The integration method of a scene (Durupınar D10, Zheng Z4).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -30,11 +31,17 @@ pub enum Integrator {
     Rk45,
     /// Velocity Verlet: second order, symplectic, exact for constant acceleration.
     VelocityVerlet,
+    /// Implicit Euler in Baraff & Witkin's form, solved by conjugate gradients: stable at
+    /// frame-sized steps, with numerical damping.
+    ImplicitEuler,
+    /// Bricis's Newmark θ-method (θ = ½ by default) with Rayleigh damping: stable at large
+    /// steps without numerical damping of its own.
+    Newmark,
 }
 
 impl Integrator {
     /// Every integrator, for listings and tests.
-    pub const ALL: [Integrator; 7] = [
+    pub const ALL: [Integrator; 9] = [
         Integrator::ExplicitEuler,
         Integrator::SymplecticEuler,
         Integrator::Midpoint,
@@ -42,6 +49,8 @@ impl Integrator {
         Integrator::Rk5,
         Integrator::Rk45,
         Integrator::VelocityVerlet,
+        Integrator::ImplicitEuler,
+        Integrator::Newmark,
     ];
 
     /// The name used in scene files and reports.
@@ -54,6 +63,8 @@ impl Integrator {
             Integrator::Rk5 => "Rk5",
             Integrator::Rk45 => "Rk45",
             Integrator::VelocityVerlet => "VelocityVerlet",
+            Integrator::ImplicitEuler => "ImplicitEuler",
+            Integrator::Newmark => "Newmark",
         }
     }
 }
@@ -75,6 +86,8 @@ pub struct StepReport {
     pub evaluations: u32,
     /// Largest accepted error estimate relative to the tolerance (≤ 1; RK45 only).
     pub max_error_ratio: f32,
+    /// Conjugate-gradient iterations (implicit methods only).
+    pub iterations: u32,
 }
 
 /// Why a step could not be completed.
@@ -91,9 +104,36 @@ pub enum StepError {
     },
 }
 
+/// The settings every method may need.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MethodSettings {
+    /// Relative error tolerance of [`Integrator::Rk45`] [-].
+    pub tolerance: f32,
+    /// θ, Rayleigh damping and solver settings of the implicit methods. For
+    /// [`Integrator::ImplicitEuler`] θ is 1 whatever is given here.
+    pub implicit: ImplicitSettings,
+}
+
+impl Default for MethodSettings {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-4,
+            implicit: ImplicitSettings {
+                theta: 0.5,
+                rayleigh: Rayleigh::default(),
+                cg_tolerance: 1e-4,
+                cg_max_iterations: 500,
+                newton_iterations: 1,
+            },
+        }
+    }
+}
+
 /// Buffers for the stages, sized once per cloth and reused every step.
 #[derive(Debug, Clone, Default)]
 pub struct IntegratorWorkspace {
+    /// Buffers of the implicit methods.
+    pub implicit: ImplicitWorkspace,
     /// Acceleration at the start of the step [m/s²]; the caller fills it before [`step`].
     pub start_acceleration: Vec<Vec3>,
     stage_velocity: Vec<Vec<Vec3>>,
@@ -110,11 +150,7 @@ impl IntegratorWorkspace {
         self.start_acceleration.resize(count, Vec3::ZERO);
         self.x.resize(count, Vec3::ZERO);
         self.v.resize(count, Vec3::ZERO);
-        for stage in self
-            .stage_velocity
-            .iter_mut()
-            .chain(&mut self.stage_acceleration)
-        {
+        for stage in self.stage_velocity.iter_mut().chain(&mut self.stage_acceleration) {
             stage.resize(count, Vec3::ZERO);
         }
     }
@@ -140,21 +176,9 @@ struct Tableau {
     order: u32,
 }
 
-const EULER: Tableau = Tableau {
-    c: &[0.0],
-    a: &[&[]],
-    b: &[1.0],
-    error: None,
-    order: 1,
-};
+const EULER: Tableau = Tableau { c: &[0.0], a: &[&[]], b: &[1.0], error: None, order: 1 };
 
-const MIDPOINT: Tableau = Tableau {
-    c: &[0.0, 0.5],
-    a: &[&[], &[0.5]],
-    b: &[0.0, 1.0],
-    error: None,
-    order: 2,
-};
+const MIDPOINT: Tableau = Tableau { c: &[0.0, 0.5], a: &[&[], &[0.5]], b: &[0.0, 1.0], error: None, order: 2 };
 
 const RK4: Tableau = Tableau {
     c: &[0.0, 0.5, 0.5, 1.0],
@@ -171,23 +195,10 @@ const CASH_KARP_A: &[&[f32]] = &[
     &[3.0 / 40.0, 9.0 / 40.0],
     &[3.0 / 10.0, -9.0 / 10.0, 6.0 / 5.0],
     &[-11.0 / 54.0, 5.0 / 2.0, -70.0 / 27.0, 35.0 / 27.0],
-    &[
-        1631.0 / 55296.0,
-        175.0 / 512.0,
-        575.0 / 13824.0,
-        44275.0 / 110592.0,
-        253.0 / 4096.0,
-    ],
+    &[1631.0 / 55296.0, 175.0 / 512.0, 575.0 / 13824.0, 44275.0 / 110592.0, 253.0 / 4096.0],
 ];
 const CASH_KARP_C: &[f32] = &[0.0, 1.0 / 5.0, 3.0 / 10.0, 3.0 / 5.0, 1.0, 7.0 / 8.0];
-const CASH_KARP_B5: &[f32] = &[
-    37.0 / 378.0,
-    0.0,
-    250.0 / 621.0,
-    125.0 / 594.0,
-    0.0,
-    512.0 / 1771.0,
-];
+const CASH_KARP_B5: &[f32] = &[37.0 / 378.0, 0.0, 250.0 / 621.0, 125.0 / 594.0, 0.0, 512.0 / 1771.0];
 const CASH_KARP_ERROR: &[f32] = &[
     37.0 / 378.0 - 2825.0 / 27648.0,
     0.0,
@@ -197,40 +208,35 @@ const CASH_KARP_ERROR: &[f32] = &[
     512.0 / 1771.0 - 0.25,
 ];
 
-const RK5: Tableau = Tableau {
-    c: CASH_KARP_C,
-    a: CASH_KARP_A,
-    b: CASH_KARP_B5,
-    error: None,
-    order: 5,
-};
+const RK5: Tableau = Tableau { c: CASH_KARP_C, a: CASH_KARP_A, b: CASH_KARP_B5, error: None, order: 5 };
 
-const RK45: Tableau = Tableau {
-    c: CASH_KARP_C,
-    a: CASH_KARP_A,
-    b: CASH_KARP_B5,
-    error: Some(CASH_KARP_ERROR),
-    order: 4,
-};
+const RK45: Tableau =
+    Tableau { c: CASH_KARP_C, a: CASH_KARP_A, b: CASH_KARP_B5, error: Some(CASH_KARP_ERROR), order: 4 };
 
 /// Errors below this [m, m/s] are rounding, not truncation: the floor of RK45's error scale.
 const ERROR_FLOOR: f32 = 1e-6;
 
 /// Advances `(x, v)` from time `t` by `h` [s] with `method`. The caller has filled
-/// `ws.start_acceleration` with the acceleration at `(x, v, t)`. `tolerance` is the
-/// relative error RK45 keeps each internal step under; the others ignore it.
+/// `ws.start_acceleration` with the acceleration at `(x, v, t)` (the implicit methods
+/// evaluate their own).
 pub fn step(
     method: Integrator,
-    dynamics: &mut impl Dynamics,
+    dynamics: &mut impl LinearDynamics,
     x: &mut [Vec3],
     v: &mut [Vec3],
     t: f32,
     h: f32,
-    tolerance: f32,
+    settings: &MethodSettings,
     ws: &mut IntegratorWorkspace,
 ) -> Result<StepReport, StepError> {
     ws.resize(x.len());
+    let tolerance = settings.tolerance;
     match method {
+        Integrator::ImplicitEuler => {
+            let euler = ImplicitSettings { theta: 1.0, ..settings.implicit };
+            Ok(implicit_step(&euler, dynamics, x, v, t, h, &mut ws.implicit))
+        }
+        Integrator::Newmark => Ok(implicit_step(&settings.implicit, dynamics, x, v, t, h, &mut ws.implicit)),
         Integrator::ExplicitEuler => Ok(runge_kutta(&EULER, dynamics, x, v, t, h, ws)),
         Integrator::Midpoint => Ok(runge_kutta(&MIDPOINT, dynamics, x, v, t, h, ws)),
         Integrator::Rk4 => Ok(runge_kutta(&RK4, dynamics, x, v, t, h, ws)),
@@ -238,18 +244,13 @@ pub fn step(
         Integrator::Rk45 => adaptive_runge_kutta(&RK45, dynamics, x, v, t, h, tolerance, ws),
         Integrator::SymplecticEuler => {
             let a = &ws.start_acceleration;
-            x.par_iter_mut()
-                .zip(v.par_iter_mut())
-                .zip(a.par_iter())
-                .with_min_len(PARALLEL_MIN_LEN)
-                .for_each(|((x, v), a)| {
+            x.par_iter_mut().zip(v.par_iter_mut()).zip(a.par_iter()).with_min_len(PARALLEL_MIN_LEN).for_each(
+                |((x, v), a)| {
                     *v += h * *a;
                     *x += h * *v;
-                });
-            Ok(StepReport {
-                accepted: 1,
-                ..StepReport::default()
-            })
+                },
+            );
+            Ok(StepReport { accepted: 1, ..StepReport::default() })
         }
         Integrator::VelocityVerlet => {
             // Drift with the start acceleration, evaluate at the new positions, then kick
@@ -272,11 +273,7 @@ pub fn step(
                 .zip(a0.par_iter().zip(a1.par_iter()))
                 .with_min_len(PARALLEL_MIN_LEN)
                 .for_each(|(v, (a0, a1))| *v += 0.5 * h * (*a0 + *a1));
-            Ok(StepReport {
-                accepted: 1,
-                evaluations: 1,
-                ..StepReport::default()
-            })
+            Ok(StepReport { accepted: 1, evaluations: 1, ..StepReport::default() })
         }
     }
 }
@@ -300,30 +297,22 @@ fn compute_stages(
         let weights = tableau.a[s];
         combine(x, &ws.stage_velocity[..s], weights, h, &mut ws.x);
         combine(v, &ws.stage_acceleration[..s], weights, h, &mut ws.v);
-        dynamics.acceleration(
-            &ws.x,
-            &ws.v,
-            t + tableau.c[s] * h,
-            &mut ws.stage_acceleration[s],
-        );
+        dynamics.acceleration(&ws.x, &ws.v, t + tableau.c[s] * h, &mut ws.stage_acceleration[s]);
         ws.stage_velocity[s].copy_from_slice(&ws.v);
     }
 }
 
 /// `out = base + h Σ_j weights[j] · stages[j]`, particle by particle.
 fn combine(base: &[Vec3], stages: &[Vec<Vec3>], weights: &[f32], h: f32, out: &mut [Vec3]) {
-    out.par_iter_mut()
-        .with_min_len(PARALLEL_MIN_LEN)
-        .enumerate()
-        .for_each(|(i, out)| {
-            let mut sum = Vec3::ZERO;
-            for (stage, &w) in stages.iter().zip(weights) {
-                if w != 0.0 {
-                    sum += w * stage[i];
-                }
+    out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, out)| {
+        let mut sum = Vec3::ZERO;
+        for (stage, &w) in stages.iter().zip(weights) {
+            if w != 0.0 {
+                sum += w * stage[i];
             }
-            *out = base[i] + h * sum;
-        });
+        }
+        *out = base[i] + h * sum;
+    });
 }
 
 fn runge_kutta(
@@ -340,11 +329,7 @@ fn runge_kutta(
     combine(v, &ws.stage_acceleration, tableau.b, h, &mut ws.v);
     x.copy_from_slice(&ws.x);
     v.copy_from_slice(&ws.v);
-    StepReport {
-        accepted: 1,
-        evaluations: tableau.b.len() as u32 - 1,
-        ..StepReport::default()
-    }
+    StepReport { accepted: 1, evaluations: tableau.b.len() as u32 - 1, ..StepReport::default() }
 }
 
 /// Internal steps of `tableau` with error control until `h` is covered. The proposed step
@@ -359,9 +344,7 @@ fn adaptive_runge_kutta(
     tolerance: f32,
     ws: &mut IntegratorWorkspace,
 ) -> Result<StepReport, StepError> {
-    let error_weights = tableau
-        .error
-        .expect("an adaptive tableau has error weights");
+    let error_weights = tableau.error.expect("an adaptive tableau has error weights");
     let order = tableau.order as f32;
     let mut report = StepReport::default();
     let mut done = 0.0f32;
@@ -370,11 +353,7 @@ fn adaptive_runge_kutta(
     while done < h {
         let remaining = h - done;
         // Take the rest in one go when it is close, rather than leave a sliver.
-        let sub = if trial >= remaining * 0.999 {
-            remaining
-        } else {
-            trial
-        };
+        let sub = if trial >= remaining * 0.999 { remaining } else { trial };
         if !have_start {
             dynamics.acceleration(x, v, t + done, &mut ws.start_acceleration);
             report.evaluations += 1;
@@ -391,21 +370,14 @@ fn adaptive_runge_kutta(
             have_start = false;
             report.accepted += 1;
             report.max_error_ratio = report.max_error_ratio.max(ratio);
-            let grow = if ratio > 0.0 {
-                0.9 * ratio.powf(-1.0 / (order + 1.0))
-            } else {
-                5.0
-            };
+            let grow = if ratio > 0.0 { 0.9 * ratio.powf(-1.0 / (order + 1.0)) } else { 5.0 };
             trial = sub * grow.clamp(1.0, 5.0);
         } else {
             report.rejected += 1;
             have_start = true;
             trial = sub * (0.9 * ratio.powf(-1.0 / order)).max(0.1);
             if trial < h * 1e-6 || !trial.is_finite() {
-                return Err(StepError::StepSizeUnderflow {
-                    h: trial,
-                    t: t + done,
-                });
+                return Err(StepError::StepSizeUnderflow { h: trial, t: t + done });
             }
         }
     }
@@ -415,14 +387,7 @@ fn adaptive_runge_kutta(
 
 /// Largest embedded error of the stages in `ws`, relative to `tolerance` times each
 /// component's scale (`|y| + |h y'|`, as in Numerical Recipes, plus a rounding floor).
-fn error_ratio(
-    weights: &[f32],
-    x: &[Vec3],
-    v: &[Vec3],
-    h: f32,
-    tolerance: f32,
-    ws: &IntegratorWorkspace,
-) -> f32 {
+fn error_ratio(weights: &[f32], x: &[Vec3], v: &[Vec3], h: f32, tolerance: f32, ws: &IntegratorWorkspace) -> f32 {
     let stages = (&ws.stage_velocity, &ws.stage_acceleration);
     (0..x.len())
         .into_par_iter()
@@ -438,11 +403,7 @@ fn error_ratio(
             let scale_v = tolerance * (v[i].length() + h * stages.1[0][i].length()) + ERROR_FLOOR;
             let ratio = (h * ex.length() / scale_x).max(h * ev.length() / scale_v);
             // A non-finite state must be rejected, and `f32::max` would drop a NaN.
-            if ratio.is_finite() {
-                ratio
-            } else {
-                f32::INFINITY
-            }
+            if ratio.is_finite() { ratio } else { f32::INFINITY }
         })
         .reduce(|| 0.0, f32::max)
 }

@@ -6,6 +6,7 @@ pub mod elements;
 pub mod forces;
 pub mod geometry;
 pub mod health;
+pub mod implicit;
 pub mod integrate;
 pub mod pins;
 pub mod probes;

@@ -8,14 +8,12 @@ use selvedge::scene::{Scene, parse_scene};
 
 /// Parses and validates scene text.
 pub fn scene(text: &str) -> Scene {
-    parse_scene(text, Path::new("test.ron"))
-        .unwrap_or_else(|e| panic!("test scene is invalid: {e}"))
+    parse_scene(text, Path::new("test.ron")).unwrap_or_else(|e| panic!("test scene is invalid: {e}"))
 }
 
 /// Builds a simulation from scene text.
 pub fn simulation(text: &str) -> Simulation {
-    Simulation::new(&scene(text), Path::new("scenes"))
-        .unwrap_or_else(|e| panic!("test scene does not build: {e}"))
+    Simulation::new(&scene(text), Path::new("scenes")).unwrap_or_else(|e| panic!("test scene does not build: {e}"))
 }
 
 /// Steps `frames` frames, panicking on divergence.
@@ -27,10 +25,7 @@ pub fn run_frames(simulation: &mut Simulation, frames: u32) {
 
 /// The value of a probe after the last frame.
 pub fn probe(simulation: &Simulation, name: &str) -> f64 {
-    simulation
-        .probes()
-        .get(name)
-        .unwrap_or_else(|| panic!("no probe {name}"))
+    simulation.probes().get(name).unwrap_or_else(|| panic!("no probe {name}"))
 }
 
 /// A cotton-like test material with the given stretch stiffness [N/m] and damping.

@@ -1,10 +1,11 @@
-//! A damped mass on a spring, built from the engine's own force model, with its
-//! closed-form motion: the reference problem for order and step-control tests.
+//! Small particle systems built from the engine's own elements, stepped by its
+//! integrators without a world: a damped mass on a spring (with its closed-form motion)
+//! and a lone particle in gravity.
 
 use glam::Vec3;
-use selvedge::components::{ClothTopology, Csr, SpringKind, Springs};
+use selvedge::components::{BendingHinges, ClothTopology, MembraneTriangles, SpringKind, Springs, Triangles};
 use selvedge::solver::forces::{Air, ClothDynamics, ForceModel, ForceScratch};
-use selvedge::solver::integrate::{Integrator, IntegratorWorkspace, StepReport, step};
+use selvedge::solver::integrate::{Integrator, IntegratorWorkspace, MethodSettings, StepReport, step};
 
 /// Mass [kg], stiffness [N/m], damping [N·s/m], rest length [m], initial stretch [m].
 pub const MASS: f32 = 1.0;
@@ -17,12 +18,7 @@ pub const STRETCH: f32 = 0.5;
 /// oscillator released from `STRETCH` at rest:
 /// `x = e^{−ζω t}(x0 cos ω_d t + (ζω x0 / ω_d) sin ω_d t)`.
 pub fn exact_state(t: f64) -> (f64, f64) {
-    let (m, k, c, x0) = (
-        f64::from(MASS),
-        f64::from(STIFFNESS),
-        f64::from(DAMPING),
-        f64::from(STRETCH),
-    );
+    let (m, k, c, x0) = (f64::from(MASS), f64::from(STIFFNESS), f64::from(DAMPING), f64::from(STRETCH));
     let omega = (k / m).sqrt();
     let zeta = c / (2.0 * (k * m).sqrt());
     let omega_d = omega * (1.0 - zeta * zeta).sqrt();
@@ -39,86 +35,93 @@ pub fn natural_frequency() -> f64 {
     (f64::from(STIFFNESS) / f64::from(MASS)).sqrt()
 }
 
-/// The oscillator: particle 0 held at the origin, particle 1 on the spring along +X.
-pub struct Oscillator {
-    springs: Springs,
+/// Particles with springs, some of them pinned, in uniform gravity.
+pub struct ParticleSystem {
+    pub x: Vec<Vec3>,
+    pub inv_mass: Vec<f32>,
+    pub springs: Springs,
+    pub gravity: Vec3,
     topology: ClothTopology,
-    inv_mass: Vec<f32>,
+    triangles: Triangles,
+    hinges: BendingHinges,
+    membranes: MembraneTriangles,
 }
 
-impl Oscillator {
-    pub fn new() -> Self {
-        let mut springs = Springs::default();
-        springs.push([0, 1], REST, STIFFNESS, DAMPING, SpringKind::Structural);
-        let topology = ClothTopology {
-            particle_springs: Csr::from_items(2, &springs.pairs),
-            particle_triangles: Csr::from_items::<3>(2, &[]),
-            free_inv_mass: vec![0.0, 1.0 / MASS],
-            builds: 1,
-        };
-        Self {
-            springs,
-            topology,
-            inv_mass: vec![1.0 / MASS; 2],
-        }
+impl ParticleSystem {
+    pub fn new(x: Vec<Vec3>, masses: &[f32], springs: Springs, pinned: &[u32], gravity: Vec3) -> Self {
+        let inv_mass: Vec<f32> = masses.iter().map(|m| 1.0 / m).collect();
+        let (triangles, hinges, membranes) =
+            (Triangles::default(), BendingHinges::default(), MembraneTriangles::default());
+        let topology = ClothTopology::build(&inv_mass, &springs, &triangles, &hinges, &membranes, pinned, 1);
+        Self { x, inv_mass, springs, gravity, topology, triangles, hinges, membranes }
     }
 
-    /// Integrates to `duration` [s] in steps of `h`; returns the final displacement [m] and
-    /// velocity [m/s], and the summed step reports.
+    /// The damped oscillator: particle 0 held at the origin, particle 1 on the spring along +X.
+    pub fn oscillator() -> Self {
+        let mut springs = Springs::default();
+        springs.push([0, 1], REST, STIFFNESS, DAMPING, SpringKind::Structural);
+        Self::new(vec![Vec3::ZERO, Vec3::new(REST + STRETCH, 0.0, 0.0)], &[MASS, MASS], springs, &[0], Vec3::ZERO)
+    }
+
+    /// Integrates from rest to `duration` [s] in steps of `h`; returns the final positions
+    /// and velocities and the summed step reports.
     pub fn run(
         &self,
         method: Integrator,
         h: f64,
         duration: f64,
-        tolerance: f32,
-    ) -> ((f64, f64), StepReport) {
+        settings: &MethodSettings,
+    ) -> (Vec<Vec3>, Vec<Vec3>, StepReport) {
         let model = ForceModel {
             inv_mass: &self.inv_mass,
+            density: 1.0,
             springs: &self.springs,
-            triangles: &[],
+            triangles: &self.triangles.indices,
+            hinges: &self.hinges,
+            membranes: &self.membranes,
             topology: &self.topology,
-            gravity: Vec3::ZERO,
+            gravity: self.gravity,
             air: Air::default(),
             user_forces: &[],
         };
         let mut scratch = ForceScratch::default();
-        let mut dynamics = ClothDynamics {
-            model,
-            free_inv_mass: &self.topology.free_inv_mass,
-            scratch: &mut scratch,
-        };
-        let mut x = vec![Vec3::ZERO, Vec3::new(REST + STRETCH, 0.0, 0.0)];
-        let mut v = vec![Vec3::ZERO; 2];
+        let mut dynamics = ClothDynamics { model, free_inv_mass: &self.topology.free_inv_mass, scratch: &mut scratch };
+        let mut x = self.x.clone();
+        let mut v = vec![Vec3::ZERO; x.len()];
         let mut ws = IntegratorWorkspace::default();
         let mut total = StepReport::default();
         let steps = (duration / h).round() as u32;
         for n in 0..steps {
-            ws.resize(2);
-            let mut a = [Vec3::ZERO; 2];
-            selvedge::solver::integrate::Dynamics::acceleration(
-                &mut dynamics,
-                &x,
-                &v,
-                (f64::from(n) * h) as f32,
-                &mut a,
-            );
+            let t = (f64::from(n) * h) as f32;
+            ws.resize(x.len());
+            let mut a = vec![Vec3::ZERO; x.len()];
+            selvedge::solver::integrate::Dynamics::acceleration(&mut dynamics, &x, &v, t, &mut a);
             ws.start_acceleration.copy_from_slice(&a);
-            let report = step(
-                method,
-                &mut dynamics,
-                &mut x,
-                &mut v,
-                (f64::from(n) * h) as f32,
-                h as f32,
-                tolerance,
-                &mut ws,
-            )
-            .expect("the oscillator is smooth");
+            let report =
+                step(method, &mut dynamics, &mut x, &mut v, t, h as f32, settings, &mut ws).expect("a smooth problem");
             total.accepted += report.accepted;
             total.rejected += report.rejected;
             total.evaluations += report.evaluations + 1;
+            total.iterations += report.iterations;
             total.max_error_ratio = total.max_error_ratio.max(report.max_error_ratio);
         }
-        ((f64::from(x[1].x - REST), f64::from(v[1].x)), total)
+        (x, v, total)
     }
+
+    /// The oscillator's displacement from rest [m] and velocity [m/s] after `run`.
+    pub fn oscillator_state(
+        &self,
+        method: Integrator,
+        h: f64,
+        duration: f64,
+        settings: &MethodSettings,
+    ) -> ((f64, f64), StepReport) {
+        let (x, v, report) = self.run(method, h, duration, settings);
+        ((f64::from(x[1].x - REST), f64::from(v[1].x)), report)
+    }
+}
+
+/// Settings with the given RK45 tolerance.
+pub fn with_tolerance(tolerance: f32) -> MethodSettings {
+    MethodSettings { tolerance, ..MethodSettings::default() }
 }

@@ -20,10 +20,7 @@ pub struct BlockPattern {
 impl BlockPattern {
     /// The pattern of `row_count` particles coupled by `stencils` (the particle lists of
     /// elements: every pair within a stencil gets a block).
-    pub fn from_stencils<'a>(
-        row_count: usize,
-        stencils: impl IntoIterator<Item = &'a [u32]>,
-    ) -> Self {
+    pub fn from_stencils<'a>(row_count: usize, stencils: impl IntoIterator<Item = &'a [u32]>) -> Self {
         let mut rows: Vec<Vec<u32>> = (0..row_count as u32).map(|i| vec![i]).collect();
         for stencil in stencils {
             for &i in stencil {
@@ -49,21 +46,14 @@ impl BlockPattern {
 
     /// Index of block `(row, column)` in the block storage, if it exists.
     pub fn slot(&self, row: u32, column: u32) -> Option<u32> {
-        let (start, end) = (
-            self.offsets[row as usize] as usize,
-            self.offsets[row as usize + 1] as usize,
-        );
-        self.columns[start..end]
-            .binary_search(&column)
-            .ok()
-            .map(|k| (start + k) as u32)
+        let (start, end) = (self.offsets[row as usize] as usize, self.offsets[row as usize + 1] as usize);
+        self.columns[start..end].binary_search(&column).ok().map(|k| (start + k) as u32)
     }
 
     /// Slots of all `N × N` blocks of a stencil, row-major: where an element's local
     /// blocks go. Panics if the stencil is not in the pattern.
     pub fn stencil_slots<const N: usize>(&self, stencil: [u32; N]) -> [[u32; N]; N] {
-        stencil
-            .map(|i| stencil.map(|j| self.slot(i, j).expect("the stencil is part of the pattern")))
+        stencil.map(|i| stencil.map(|j| self.slot(i, j).expect("the stencil is part of the pattern")))
     }
 }
 
@@ -95,33 +85,26 @@ impl BlockMatrix {
     /// Adds `diagonal[i] · I` to each diagonal block.
     pub fn add_diagonal(&mut self, pattern: &BlockPattern, diagonal: impl Fn(usize) -> f32) {
         for i in 0..pattern.rows() {
-            let slot = pattern
-                .slot(i as u32, i as u32)
-                .expect("every row has its diagonal");
+            let slot = pattern.slot(i as u32, i as u32).expect("every row has its diagonal");
             self.blocks[slot as usize] += Mat3::from_diagonal(Vec3::splat(diagonal(i)));
         }
     }
 
     /// `out = self · x`.
     pub fn multiply(&self, pattern: &BlockPattern, x: &[Vec3], out: &mut [Vec3]) {
-        out.par_iter_mut()
-            .with_min_len(PARALLEL_MIN_LEN)
-            .enumerate()
-            .for_each(|(i, out)| {
-                let (start, end) = (pattern.offsets[i] as usize, pattern.offsets[i + 1] as usize);
-                let mut sum = Vec3::ZERO;
-                for k in start..end {
-                    sum += self.blocks[k] * x[pattern.columns[k] as usize];
-                }
-                *out = sum;
-            });
+        out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, out)| {
+            let (start, end) = (pattern.offsets[i] as usize, pattern.offsets[i + 1] as usize);
+            let mut sum = Vec3::ZERO;
+            for k in start..end {
+                sum += self.blocks[k] * x[pattern.columns[k] as usize];
+            }
+            *out = sum;
+        });
     }
 
     /// The block `(row, column)`, zero where the pattern has none.
     pub fn block(&self, pattern: &BlockPattern, row: u32, column: u32) -> Mat3 {
-        pattern
-            .slot(row, column)
-            .map_or(Mat3::ZERO, |s| self.blocks[s as usize])
+        pattern.slot(row, column).map_or(Mat3::ZERO, |s| self.blocks[s as usize])
     }
 }
 
@@ -138,15 +121,9 @@ mod tests {
         let mut m = BlockMatrix::default();
         m.reset(&pattern);
         m.add_diagonal(&pattern, |i| i as f32 + 1.0);
-        m.add_local(
-            &pattern.stencil_slots([1, 2]),
-            &[[Mat3::ZERO, Mat3::IDENTITY], [Mat3::IDENTITY, Mat3::ZERO]],
-        );
+        m.add_local(&pattern.stencil_slots([1, 2]), &[[Mat3::ZERO, Mat3::IDENTITY], [Mat3::IDENTITY, Mat3::ZERO]]);
         let mut out = vec![Vec3::ZERO; 3];
         m.multiply(&pattern, &[Vec3::X, Vec3::Y, Vec3::Z], &mut out);
-        assert_eq!(
-            out,
-            vec![Vec3::X, 2.0 * Vec3::Y + Vec3::Z, 3.0 * Vec3::Z + Vec3::Y]
-        );
+        assert_eq!(out, vec![Vec3::X, 2.0 * Vec3::Y + Vec3::Z, 3.0 * Vec3::Z + Vec3::Y]);
     }
 }

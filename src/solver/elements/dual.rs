@@ -6,12 +6,7 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 
 /// The arithmetic a differentiable kernel may use.
 pub trait Real:
-    Copy
-    + Add<Output = Self>
-    + Sub<Output = Self>
-    + Mul<Output = Self>
-    + Div<Output = Self>
-    + Neg<Output = Self>
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self> + Neg<Output = Self>
 {
     /// A constant.
     fn constant(value: f32) -> Self;
@@ -66,10 +61,7 @@ impl Sub for Dual {
 impl Mul for Dual {
     type Output = Self;
     fn mul(self, o: Self) -> Self {
-        Self::new(
-            self.value * o.value,
-            self.derivative * o.value + self.value * o.derivative,
-        )
+        Self::new(self.value * o.value, self.derivative * o.value + self.value * o.derivative)
     }
 }
 
@@ -98,10 +90,7 @@ impl Real for Dual {
     }
     fn atan2(self, x: Self) -> Self {
         let r2 = self.value * self.value + x.value * x.value;
-        Self::new(
-            self.value.atan2(x.value),
-            (x.value * self.derivative - self.value * x.derivative) / r2,
-        )
+        Self::new(self.value.atan2(x.value), (x.value * self.derivative - self.value * x.derivative) / r2)
     }
 }
 
@@ -117,11 +106,7 @@ impl<R: Real> V3<R> {
     /// Cross product.
     pub fn cross(self, o: Self) -> Self {
         let [a, b] = [self.0, o.0];
-        V3([
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ])
+        V3([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
     }
     /// `self · s`.
     pub fn scale(self, s: R) -> Self {

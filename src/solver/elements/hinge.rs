@@ -43,11 +43,7 @@ impl BendingLaw {
                     (0.5 * b_r * k * k, b_r * kappa, b_r)
                 } else if k <= kappa0 {
                     let w = w_r + root_part(k) - root_part(kappa_r);
-                    (
-                        w,
-                        sign * 2.0 * b * (kappa0 * k).sqrt(),
-                        b * (kappa0 / k).sqrt(),
-                    )
+                    (w, sign * 2.0 * b * (kappa0 * k).sqrt(), b * (kappa0 / k).sqrt())
                 } else {
                     let w0 = w_r + root_part(kappa0) - root_part(kappa_r);
                     let w = w0 + b * (0.5 * (k * k - kappa0 * kappa0) + kappa0 * (k - kappa0));
@@ -134,12 +130,7 @@ impl HingeElement {
     /// second derivative comes from forward differentiation of its gradient); when
     /// `definite`, only the Gauss–Newton part `−A W″/d² ∇θ ∇θᵀ` is kept, which is
     /// negative semi-definite for any law with `W″ ≥ 0`.
-    pub fn position_jacobian(
-        &self,
-        law: BendingLaw,
-        x: [Vec3; 4],
-        definite: bool,
-    ) -> [[Mat3; 4]; 4] {
+    pub fn position_jacobian(&self, law: BendingLaw, x: [Vec3; 4], definite: bool) -> [[Mat3; 4]; 4] {
         let p = x.map(to_v3);
         let kappa = self.curvature(dihedral_angle(p));
         let (_, moment, tangent) = law.density(self.rigidity, kappa);
@@ -159,14 +150,11 @@ impl HingeElement {
         for b in 0..4 {
             for k in 0..3 {
                 let seeded = std::array::from_fn(|v| {
-                    V3(std::array::from_fn(|c| {
-                        Dual::new(x[v][c], if v == b && c == k { 1.0 } else { 0.0 })
-                    }))
+                    V3(std::array::from_fn(|c| Dual::new(x[v][c], if v == b && c == k { 1.0 } else { 0.0 })))
                 });
                 let column = dihedral_gradient::<Dual>(seeded);
                 for (a, g) in column.iter().enumerate() {
-                    let derivative =
-                        Vec3::new(g.0[0].derivative, g.0[1].derivative, g.0[2].derivative);
+                    let derivative = Vec3::new(g.0[0].derivative, g.0[1].derivative, g.0[2].derivative);
                     *blocks[a][b].col_mut(k) += scale * derivative;
                 }
             }
@@ -182,42 +170,20 @@ mod tests {
 
     /// A bent, skewed hinge: edge along roughly +X, wings at different heights.
     fn hinge_positions() -> [Vec3; 4] {
-        [
-            Vec3::new(0.4, 0.9, 0.2),
-            Vec3::new(0.6, -0.8, 0.5),
-            Vec3::new(0.0, 0.05, 0.0),
-            Vec3::new(1.0, -0.05, 0.1),
-        ]
+        [Vec3::new(0.4, 0.9, 0.2), Vec3::new(0.6, -0.8, 0.5), Vec3::new(0.0, 0.05, 0.0), Vec3::new(1.0, -0.05, 0.1)]
     }
 
     fn element() -> HingeElement {
-        HingeElement {
-            rest_angle: 0.1,
-            rigidity: 2e-3,
-            area: 0.9,
-            width: 0.45,
-        }
+        HingeElement { rest_angle: 0.1, rigidity: 2e-3, area: 0.9, width: 0.45 }
     }
 
-    const LAWS: [BendingLaw; 2] = [
-        BendingLaw::Linear,
-        BendingLaw::Zheng {
-            kappa0: 30.0,
-            kappa_r: 0.3,
-        },
-    ];
+    const LAWS: [BendingLaw; 2] = [BendingLaw::Linear, BendingLaw::Zheng { kappa0: 30.0, kappa_r: 0.3 }];
 
     #[test]
     fn a_flat_hinge_has_zero_angle_and_a_folded_one_the_fold_angle() {
         let flat = [Vec3::Y, -Vec3::Y, Vec3::ZERO, Vec3::X].map(to_v3);
         assert!(dihedral_angle(flat).abs() < 1e-6);
-        let folded = [
-            Vec3::Y,
-            Vec3::new(0.0, -1.0, 1.0).normalize(),
-            Vec3::ZERO,
-            Vec3::X,
-        ]
-        .map(to_v3);
+        let folded = [Vec3::Y, Vec3::new(0.0, -1.0, 1.0).normalize(), Vec3::ZERO, Vec3::X].map(to_v3);
         assert!((dihedral_angle(folded).abs() - std::f32::consts::FRAC_PI_4).abs() < 1e-5);
     }
 
@@ -273,12 +239,7 @@ mod tests {
                             },
                             x[b],
                         );
-                        assert_close(
-                            blocks[a][b].row(axis),
-                            numeric,
-                            5e-3,
-                            &format!("{law:?} ∂f{a}/∂x{b}"),
-                        );
+                        assert_close(blocks[a][b].row(axis), numeric, 5e-3, &format!("{law:?} ∂f{a}/∂x{b}"));
                     }
                 }
             }
@@ -287,10 +248,7 @@ mod tests {
 
     #[test]
     fn zheng_law_is_continuous_with_the_published_moments() {
-        let law = BendingLaw::Zheng {
-            kappa0: 30.0,
-            kappa_r: 0.3,
-        };
+        let law = BendingLaw::Zheng { kappa0: 30.0, kappa_r: 0.3 };
         let b0 = 3.3e-3;
         // m(κ₀) = 2 B₀ κ₀ from both sides; m(2κ₀) = 3 B₀ κ₀; m(κ₀/4) = B₀ κ₀.
         assert!((law.density(b0, 30.0).1 - 2.0 * b0 * 30.0).abs() < 1e-6);
@@ -301,13 +259,7 @@ mod tests {
         // energy changes by 2δ·m and the moment by about 2δ·W″.
         let delta = 1e-5;
         let (below, above) = (law.density(b0, 0.3 - delta), law.density(b0, 0.3 + delta));
-        assert!(
-            ((above.0 - below.0) - 2.0 * delta * below.1).abs() < 1e-8,
-            "energy jumps: {below:?} {above:?}"
-        );
-        assert!(
-            (above.1 - below.1).abs() < 4.0 * delta * below.2,
-            "moment jumps: {below:?} {above:?}"
-        );
+        assert!(((above.0 - below.0) - 2.0 * delta * below.1).abs() < 1e-8, "energy jumps: {below:?} {above:?}");
+        assert!((above.1 - below.1).abs() < 4.0 * delta * below.2, "moment jumps: {below:?} {above:?}");
     }
 }

@@ -24,21 +24,12 @@ impl MembraneMaterial {
     /// and Poisson ratio `nu`.
     pub fn isotropic(e: f32, nu: f32) -> Self {
         let c = e / (1.0 - nu * nu);
-        Self {
-            d1: c,
-            d2: c,
-            d3: nu * c,
-            d4: 0.5 * (1.0 - nu) * c,
-        }
+        Self { d1: c, d2: c, d3: nu * c, d4: 0.5 * (1.0 - nu) * c }
     }
 
     /// Second Piola–Kirchhoff stress `(S₁₁, S₂₂, S₁₂)` [N/m] for Green strain `(E₁₁, E₂₂, E₁₂)`.
     pub fn stress(&self, e11: f32, e22: f32, e12: f32) -> (f32, f32, f32) {
-        (
-            self.d1 * e11 + self.d3 * e22,
-            self.d3 * e11 + self.d2 * e22,
-            self.d4 * 2.0 * e12,
-        )
+        (self.d1 * e11 + self.d3 * e22, self.d3 * e11 + self.d2 * e22, self.d4 * 2.0 * e12)
     }
 }
 
@@ -82,24 +73,15 @@ impl MembraneElement {
         let n = normal.try_normalize()?;
         let u = (warp - warp.dot(n) * n).try_normalize()?;
         let v = n.cross(u);
-        let rest = Mat2::from_cols(
-            Vec2::new(e1.dot(u), e1.dot(v)),
-            Vec2::new(e2.dot(u), e2.dot(v)),
-        );
-        (rest.determinant().abs() > 0.0).then(|| Self {
-            rest_inverse: rest.inverse(),
-            rest_area,
-        })
+        let rest = Mat2::from_cols(Vec2::new(e1.dot(u), e1.dot(v)), Vec2::new(e2.dot(u), e2.dot(v)));
+        (rest.determinant().abs() > 0.0).then(|| Self { rest_inverse: rest.inverse(), rest_area })
     }
 
     /// `F` at positions `x`.
     pub fn deformation(&self, x: [Vec3; 3]) -> Deformation {
         let (e1, e2) = (x[1] - x[0], x[2] - x[0]);
         let m = self.rest_inverse;
-        Deformation {
-            warp: e1 * m.x_axis.x + e2 * m.x_axis.y,
-            weft: e1 * m.y_axis.x + e2 * m.y_axis.y,
-        }
+        Deformation { warp: e1 * m.x_axis.x + e2 * m.x_axis.y, weft: e1 * m.y_axis.x + e2 * m.y_axis.y }
     }
 
     /// Elastic energy [J].
@@ -130,20 +112,11 @@ impl MembraneElement {
     /// The 3×3 blocks `∂f_a/∂x_b` [N/m], exact when `definite` is false. When `definite`,
     /// the stress in the geometric term is replaced by its positive part, which makes the
     /// blocks negative semi-definite (the material term already is for a positive 𝔻).
-    pub fn position_jacobian(
-        &self,
-        material: &MembraneMaterial,
-        x: [Vec3; 3],
-        definite: bool,
-    ) -> [[glam::Mat3; 3]; 3] {
+    pub fn position_jacobian(&self, material: &MembraneMaterial, x: [Vec3; 3], definite: bool) -> [[glam::Mat3; 3]; 3] {
         let f = self.deformation(x);
         let (e11, e22, e12) = f.green_strain();
         let (s11, s22, s12) = material.stress(e11, e22, e12);
-        let (g11, g22, g12) = if definite {
-            positive_part(s11, s22, s12)
-        } else {
-            (s11, s22, s12)
-        };
+        let (g11, g22, g12) = if definite { positive_part(s11, s22, s12) } else { (s11, s22, s12) };
         let m = self.rest_inverse;
         let mut blocks = [[glam::Mat3::ZERO; 3]; 3];
         for b in 0..3 {
@@ -202,38 +175,18 @@ mod tests {
     use super::*;
     use crate::solver::elements::testing::{assert_close, central_difference};
 
-    const MATERIAL: MembraneMaterial = MembraneMaterial {
-        d1: 300.0,
-        d2: 120.0,
-        d3: 40.0,
-        d4: 60.0,
-    };
+    const MATERIAL: MembraneMaterial = MembraneMaterial { d1: 300.0, d2: 120.0, d3: 40.0, d4: 60.0 };
 
     fn element() -> (MembraneElement, [Vec3; 3]) {
-        let rest = [
-            Vec3::ZERO,
-            Vec3::new(0.1, 0.0, 0.0),
-            Vec3::new(0.02, 0.09, 0.0),
-        ];
+        let rest = [Vec3::ZERO, Vec3::new(0.1, 0.0, 0.0), Vec3::new(0.02, 0.09, 0.0)];
         let warp = Vec3::new(1.0, 0.3, 0.0);
-        let deformed = [
-            Vec3::new(0.0, 0.01, 0.0),
-            Vec3::new(0.11, -0.01, 0.02),
-            Vec3::new(0.03, 0.085, -0.01),
-        ];
-        (
-            MembraneElement::from_rest(rest, warp).expect("a proper triangle"),
-            deformed,
-        )
+        let deformed = [Vec3::new(0.0, 0.01, 0.0), Vec3::new(0.11, -0.01, 0.02), Vec3::new(0.03, 0.085, -0.01)];
+        (MembraneElement::from_rest(rest, warp).expect("a proper triangle"), deformed)
     }
 
     #[test]
     fn a_triangle_at_rest_has_identity_deformation_and_no_energy() {
-        let rest = [
-            Vec3::ZERO,
-            Vec3::new(0.1, 0.0, 0.0),
-            Vec3::new(0.02, 0.09, 0.0),
-        ];
+        let rest = [Vec3::ZERO, Vec3::new(0.1, 0.0, 0.0), Vec3::new(0.02, 0.09, 0.0)];
         let e = MembraneElement::from_rest(rest, Vec3::X).expect("a proper triangle");
         let f = e.deformation(rest);
         assert!((f.warp - Vec3::X).length() < 1e-6 && (f.weft - Vec3::Y).length() < 1e-6);
@@ -244,19 +197,11 @@ mod tests {
     #[test]
     fn uniaxial_warp_stretch_gives_the_warp_stress() {
         // Stretch 1 % along the warp with the weft held: S₁₁ = d₁ E₁₁, S₂₂ = d₃ E₁₁.
-        let rest = [
-            Vec3::ZERO,
-            Vec3::new(0.1, 0.0, 0.0),
-            Vec3::new(0.0, 0.1, 0.0),
-        ];
+        let rest = [Vec3::ZERO, Vec3::new(0.1, 0.0, 0.0), Vec3::new(0.0, 0.1, 0.0)];
         let e = MembraneElement::from_rest(rest, Vec3::X).expect("a proper triangle");
         let stretched = rest.map(|p| Vec3::new(1.01 * p.x, p.y, p.z));
         let (e11, e22, e12) = e.deformation(stretched).green_strain();
-        assert!(
-            (e11 - 0.5 * (1.01f32 * 1.01 - 1.0)).abs() < 1e-6
-                && e22.abs() < 1e-7
-                && e12.abs() < 1e-7
-        );
+        assert!((e11 - 0.5 * (1.01f32 * 1.01 - 1.0)).abs() < 1e-6 && e22.abs() < 1e-7 && e12.abs() < 1e-7);
         let (s11, s22, _) = MATERIAL.stress(e11, e22, e12);
         assert!((s11 - 300.0 * e11).abs() < 1e-4 && (s22 - 40.0 * e11).abs() < 1e-4);
     }
@@ -293,12 +238,7 @@ mod tests {
                         },
                         x[b],
                     );
-                    assert_close(
-                        blocks[a][b].row(axis),
-                        numeric,
-                        5e-3,
-                        &format!("∂f{a}/∂x{b}"),
-                    );
+                    assert_close(blocks[a][b].row(axis), numeric, 5e-3, &format!("∂f{a}/∂x{b}"));
                 }
             }
         }
@@ -306,11 +246,7 @@ mod tests {
 
     #[test]
     fn the_definite_jacobian_is_negative_semi_definite_under_compression() {
-        let rest = [
-            Vec3::ZERO,
-            Vec3::new(0.1, 0.0, 0.0),
-            Vec3::new(0.0, 0.1, 0.0),
-        ];
+        let rest = [Vec3::ZERO, Vec3::new(0.1, 0.0, 0.0), Vec3::new(0.0, 0.1, 0.0)];
         let e = MembraneElement::from_rest(rest, Vec3::X).expect("a proper triangle");
         let squeezed = rest.map(|p| Vec3::new(0.8 * p.x, 1.05 * p.y, 0.01 * p.x));
         let blocks = e.position_jacobian(&MATERIAL, squeezed, true);
@@ -322,10 +258,8 @@ mod tests {
         };
         for _ in 0..200 {
             let d: [Vec3; 3] = std::array::from_fn(|_| Vec3::new(random(), random(), random()));
-            let quadratic: f32 = (0..3)
-                .flat_map(|a| (0..3).map(move |b| (a, b)))
-                .map(|(a, b)| d[a].dot(blocks[a][b] * d[b]))
-                .sum();
+            let quadratic: f32 =
+                (0..3).flat_map(|a| (0..3).map(move |b| (a, b))).map(|(a, b)| d[a].dot(blocks[a][b] * d[b])).sum();
             assert!(quadratic <= 1e-4, "positive curvature {quadratic}");
         }
     }

@@ -39,14 +39,7 @@ impl SpringElement {
     /// is not symmetric). When `definite`, the transverse elastic term is clamped at zero
     /// under compression and the damping term dropped (Choi & Ko), so that `−K` is
     /// symmetric positive semi-definite, as conjugate gradients need.
-    pub fn position_jacobian(
-        &self,
-        xi: Vec3,
-        xj: Vec3,
-        vi: Vec3,
-        vj: Vec3,
-        definite: bool,
-    ) -> Mat3 {
+    pub fn position_jacobian(&self, xi: Vec3, xj: Vec3, vi: Vec3, vj: Vec3, definite: bool) -> Mat3 {
         let d = xi - xj;
         let length = d.length();
         if length <= f32::EPSILON * self.rest {
@@ -84,22 +77,13 @@ mod tests {
     use super::*;
     use crate::solver::elements::testing::{assert_close, central_difference};
 
-    const SPRING: SpringElement = SpringElement {
-        rest: 0.8,
-        stiffness: 30.0,
-        damping: 0.7,
-    };
+    const SPRING: SpringElement = SpringElement { rest: 0.8, stiffness: 30.0, damping: 0.7 };
 
     #[test]
     fn force_is_minus_the_gradient_of_the_energy() {
         let (xi, xj) = (Vec3::new(0.3, -0.2, 0.9), Vec3::new(-0.4, 0.1, 0.2));
         let numeric = -central_difference(|x| SPRING.energy(x, xj), xi);
-        assert_close(
-            SPRING.force(xi, xj, Vec3::ZERO, Vec3::ZERO),
-            numeric,
-            1e-3,
-            "elastic force",
-        );
+        assert_close(SPRING.force(xi, xj, Vec3::ZERO, Vec3::ZERO), numeric, 1e-3, "elastic force");
     }
 
     #[test]
@@ -112,12 +96,7 @@ mod tests {
                 let numeric = central_difference(|x| SPRING.force(x, xj, vi, vj)[axis], xi);
                 assert_close(k.row(axis), numeric, 1e-3, "∂f/∂x");
                 let numeric = central_difference(|v| SPRING.force(xi, xj, v, vj)[axis], vi);
-                assert_close(
-                    SPRING.velocity_jacobian(xi, xj).row(axis),
-                    numeric,
-                    1e-3,
-                    "∂f/∂v",
-                );
+                assert_close(SPRING.velocity_jacobian(xi, xj).row(axis), numeric, 1e-3, "∂f/∂v");
             }
         }
     }
@@ -130,9 +109,6 @@ mod tests {
             assert!(direction.dot(k * direction) <= 1e-6);
         }
         let exact = SPRING.position_jacobian(xi, xj, Vec3::ZERO, Vec3::ZERO, false);
-        assert!(
-            Vec3::Y.dot(exact * Vec3::Y) > 0.0,
-            "the exact one is indefinite there"
-        );
+        assert!(Vec3::Y.dot(exact * Vec3::Y) > 0.0, "the exact one is indefinite there");
     }
 }

@@ -1,0 +1,276 @@
+//! Linearly implicit integration: one Newton step of the θ-method per time step, solved by
+//! preconditioned conjugate gradients over the block-sparse derivatives.
+//!
+//! With `K = ∂f/∂x`, `D = ∂f/∂v` and Rayleigh damping `C = αM − βK` (α [1/s], β [s]), the
+//! θ-method `x₁ = x₀ + h((1−θ)v₀ + θv₁)`, `M(v₁ − v₀) = h((1−θ)F₀ + θF₁)`, linearised about
+//! the start of the step, gives
+//!
+//! `((1 + hθα) M − hθ D − (hθβ + h²θ²) K) Δv = h f₀ − hα M v₀ + (hβ + h²θ) K v₀`.
+//!
+//! θ = 1 without Rayleigh damping is Baraff & Witkin's implicit Euler; θ = ½ with α, β is
+//! Bricis's Newmark scheme (constant average acceleration, eqs 6.57–6.60), which is the
+//! trapezoidal rule on the first-order system. Further Newton iterations solve the
+//! nonlinear step `M Δv = h((1−θ)F₀ + θF(x₁, v₁))` at the current iterate. Pinned
+//! particles are filtered out of the solve (their Δv stays zero), as in Baraff & Witkin's
+//! modified PCG.
+
+use glam::{Mat3, Vec3};
+use rayon::prelude::*;
+
+use super::PARALLEL_MIN_LEN;
+use super::elements::{BlockMatrix, BlockPattern};
+use super::integrate::{Dynamics, StepReport};
+
+/// Rayleigh damping `C = αM + βK_s` (K_s the stiffness, `−∂f/∂x`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Rayleigh {
+    /// Mass-proportional coefficient α [1/s].
+    pub alpha: f32,
+    /// Stiffness-proportional coefficient β [s].
+    pub beta: f32,
+}
+
+impl Rayleigh {
+    /// The coefficients that give damping ratio `ratio` at both angular frequencies
+    /// `omega1` and `omega2` [rad/s], from `α + β ω² = 2 ω ξ` (Bricis eq. 6.53).
+    pub fn from_frequencies(omega1: f32, omega2: f32, ratio: f32) -> Self {
+        let beta = 2.0 * ratio / (omega1 + omega2);
+        Self { alpha: 2.0 * ratio * omega1 * omega2 / (omega1 + omega2), beta }
+    }
+}
+
+/// How the implicit step is set up and solved.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImplicitSettings {
+    /// θ ∈ [½, 1]: 1 is implicit Euler, ½ the trapezoidal (Newmark average-acceleration) rule.
+    pub theta: f32,
+    /// Rayleigh damping.
+    pub rayleigh: Rayleigh,
+    /// Relative residual at which conjugate gradients stop [-].
+    pub cg_tolerance: f32,
+    /// Iteration cap of conjugate gradients.
+    pub cg_max_iterations: u32,
+    /// Newton iterations per step: 1 is the linearly implicit step (Baraff & Witkin);
+    /// more solve the nonlinear θ-step, which the trapezoidal rule needs to keep its
+    /// stability when the forces are far from linear over a step.
+    pub newton_iterations: u32,
+}
+
+/// A system whose forces can be linearised: what an implicit solver needs beyond
+/// [`Dynamics`].
+pub trait LinearDynamics: Dynamics {
+    /// The block pattern of the derivatives.
+    fn pattern(&self) -> &BlockPattern;
+    /// Mass of particle `i` [kg].
+    fn mass(&self, i: usize) -> f32;
+    /// Whether particle `i` is free to move (not pinned).
+    fn is_free(&self, i: usize) -> bool;
+    /// Forces [N] and their semi-definite derivatives at `(x, v, t)`.
+    fn linearize(
+        &mut self,
+        x: &[Vec3],
+        v: &[Vec3],
+        t: f32,
+        force: &mut [Vec3],
+        dfdx: &mut BlockMatrix,
+        dfdv: &mut BlockMatrix,
+    );
+}
+
+/// Buffers of the implicit step, reused from step to step.
+#[derive(Debug, Clone, Default)]
+pub struct ImplicitWorkspace {
+    force: Vec<Vec3>,
+    start_force: Vec<Vec3>,
+    dfdx: BlockMatrix,
+    dfdv: BlockMatrix,
+    system: BlockMatrix,
+    rhs: Vec<Vec3>,
+    dv: Vec<Vec3>,
+    delta: Vec<Vec3>,
+    residual: Vec<Vec3>,
+    preconditioned: Vec<Vec3>,
+    direction: Vec<Vec3>,
+    product: Vec<Vec3>,
+    x: Vec<Vec3>,
+    v: Vec<Vec3>,
+    preconditioner: Vec<Mat3>,
+    free: Vec<bool>,
+}
+
+/// Relative size of a Newton correction below which the step counts as converged.
+const NEWTON_TOLERANCE: f64 = 1e-5;
+
+/// Advances `(x, v)` by one implicit θ-step of length `h`.
+pub fn implicit_step(
+    settings: &ImplicitSettings,
+    dynamics: &mut impl LinearDynamics,
+    x: &mut [Vec3],
+    v: &mut [Vec3],
+    t: f32,
+    h: f32,
+    ws: &mut ImplicitWorkspace,
+) -> StepReport {
+    let n = x.len();
+    for buffer in [
+        &mut ws.force,
+        &mut ws.start_force,
+        &mut ws.rhs,
+        &mut ws.dv,
+        &mut ws.delta,
+        &mut ws.residual,
+        &mut ws.preconditioned,
+        &mut ws.direction,
+        &mut ws.product,
+        &mut ws.x,
+        &mut ws.v,
+    ] {
+        buffer.resize(n, Vec3::ZERO);
+    }
+    ws.free.clear();
+    ws.free.extend((0..n).map(|i| dynamics.is_free(i)));
+    let (theta, Rayleigh { alpha, beta }) = (settings.theta, settings.rayleigh);
+    let mut report = StepReport { accepted: 1, ..StepReport::default() };
+
+    // Linearised step about the start: F₀ = f₀ − αMv₀ + βKv₀, and
+    // A Δv = h F₀ + h²θ K v₀.
+    dynamics.linearize(x, v, t, &mut ws.force, &mut ws.dfdx, &mut ws.dfdv);
+    ws.dfdx.multiply(dynamics.pattern(), v, &mut ws.product);
+    for i in 0..n {
+        ws.start_force[i] = ws.force[i] - alpha * dynamics.mass(i) * v[i] + beta * ws.product[i];
+        ws.rhs[i] = h * ws.start_force[i] + h * h * theta * ws.product[i];
+    }
+    build_system(settings, h, dynamics, ws);
+    report.iterations += conjugate_gradient(dynamics.pattern(), settings, ws);
+    ws.dv.copy_from_slice(&ws.delta);
+
+    for _ in 1..settings.newton_iterations {
+        for i in 0..n {
+            ws.x[i] = x[i] + h * (v[i] + theta * ws.dv[i]);
+            ws.v[i] = v[i] + ws.dv[i];
+        }
+        dynamics.linearize(&ws.x, &ws.v, t + h, &mut ws.force, &mut ws.dfdx, &mut ws.dfdv);
+        ws.dfdx.multiply(dynamics.pattern(), &ws.v, &mut ws.product);
+        // −R = h((1−θ)F₀ + θF₁) − M Δv, with F₁ = f₁ − αMv₁ + βKv₁.
+        for i in 0..n {
+            let mass = dynamics.mass(i);
+            let end_force = ws.force[i] - alpha * mass * ws.v[i] + beta * ws.product[i];
+            ws.rhs[i] = h * ((1.0 - theta) * ws.start_force[i] + theta * end_force) - mass * ws.dv[i];
+        }
+        build_system(settings, h, dynamics, ws);
+        report.iterations += conjugate_gradient(dynamics.pattern(), settings, ws);
+        for i in 0..n {
+            ws.dv[i] += ws.delta[i];
+        }
+        report.evaluations += 1;
+        if dot(&ws.delta, &ws.delta) <= NEWTON_TOLERANCE * NEWTON_TOLERANCE * dot(&ws.dv, &ws.dv) {
+            break;
+        }
+    }
+
+    let dv = &ws.dv;
+    x.par_iter_mut().zip(v.par_iter_mut()).zip(dv.par_iter()).with_min_len(PARALLEL_MIN_LEN).for_each(
+        |((x, v), dv)| {
+            *x += h * (*v + theta * *dv);
+            *v += *dv;
+        },
+    );
+    report
+}
+
+/// `A = (1 + hθα) M − hθ D − (hθβ + h²θ²) K` from the derivatives in `ws`, with its
+/// block-Jacobi preconditioner; zeroes the right-hand side on pinned particles.
+fn build_system(settings: &ImplicitSettings, h: f32, dynamics: &impl LinearDynamics, ws: &mut ImplicitWorkspace) {
+    let (theta, Rayleigh { alpha, beta }) = (settings.theta, settings.rayleigh);
+    let pattern = dynamics.pattern();
+    let k_weight = h * theta * beta + h * h * theta * theta;
+    ws.system.blocks.clear();
+    ws.system.blocks.extend(ws.dfdv.blocks.iter().zip(&ws.dfdx.blocks).map(|(d, k)| -(h * theta) * *d - k_weight * *k));
+    ws.system.add_diagonal(pattern, |i| (1.0 + h * theta * alpha) * dynamics.mass(i));
+    ws.preconditioner.clear();
+    ws.preconditioner.extend((0..ws.free.len()).map(|i| {
+        let block = ws.system.block(pattern, i as u32, i as u32);
+        if block.determinant().abs() > 0.0 { block.inverse() } else { Mat3::IDENTITY }
+    }));
+    for (rhs, &free) in ws.rhs.iter_mut().zip(&ws.free) {
+        if !free {
+            *rhs = Vec3::ZERO;
+        }
+    }
+}
+
+fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
+    a.iter().zip(b).map(|(a, b)| f64::from(a.dot(*b))).sum()
+}
+
+/// Zeroes the entries of pinned particles.
+fn filter(values: &mut [Vec3], free: &[bool]) {
+    for (value, &free) in values.iter_mut().zip(free) {
+        if !free {
+            *value = Vec3::ZERO;
+        }
+    }
+}
+
+/// `out = P · residual` for the block-Jacobi preconditioner `P`.
+fn precondition(residual: &[Vec3], preconditioner: &[Mat3], out: &mut [Vec3]) {
+    out.par_iter_mut()
+        .zip(residual.par_iter())
+        .zip(preconditioner.par_iter())
+        .with_min_len(PARALLEL_MIN_LEN)
+        .for_each(|((o, r), p)| *o = *p * *r);
+}
+
+/// Solves `system · delta = rhs` over the free particles with block-Jacobi preconditioned
+/// conjugate gradients, from `delta = 0`. Returns the iterations taken. Stops early on a
+/// direction of non-positive curvature, which a semi-definite assembly should not give.
+fn conjugate_gradient(pattern: &BlockPattern, settings: &ImplicitSettings, ws: &mut ImplicitWorkspace) -> u32 {
+    ws.delta.fill(Vec3::ZERO);
+    ws.residual.copy_from_slice(&ws.rhs);
+    precondition(&ws.residual, &ws.preconditioner, &mut ws.preconditioned);
+    filter(&mut ws.preconditioned, &ws.free);
+    ws.direction.copy_from_slice(&ws.preconditioned);
+    let target = f64::from(settings.cg_tolerance).powi(2) * dot(&ws.rhs, &ws.rhs);
+    let mut rz = dot(&ws.residual, &ws.preconditioned);
+    for iteration in 0..settings.cg_max_iterations {
+        if dot(&ws.residual, &ws.residual) <= target {
+            return iteration;
+        }
+        ws.system.multiply(pattern, &ws.direction, &mut ws.product);
+        filter(&mut ws.product, &ws.free);
+        let curvature = dot(&ws.direction, &ws.product);
+        if curvature <= 0.0 {
+            return iteration;
+        }
+        let step = (rz / curvature) as f32;
+        for i in 0..ws.delta.len() {
+            ws.delta[i] += step * ws.direction[i];
+            ws.residual[i] -= step * ws.product[i];
+        }
+        precondition(&ws.residual, &ws.preconditioner, &mut ws.preconditioned);
+        filter(&mut ws.preconditioned, &ws.free);
+        let next = dot(&ws.residual, &ws.preconditioned);
+        let ratio = (next / rz) as f32;
+        rz = next;
+        for i in 0..ws.direction.len() {
+            ws.direction[i] = ws.preconditioned[i] + ratio * ws.direction[i];
+        }
+    }
+    settings.cg_max_iterations
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bricis_critical_damping_at_0_3_and_0_9_gives_his_coefficients() {
+        let r = Rayleigh::from_frequencies(0.3, 0.9, 1.0);
+        assert!((r.alpha - 0.45).abs() < 1e-6, "α = {}", r.alpha);
+        assert!((r.beta - 5.0 / 3.0).abs() < 1e-6, "β = {}", r.beta);
+        // Both modes critically damped: α + β ω² = 2 ω.
+        for omega in [0.3f32, 0.9] {
+            assert!((r.alpha + r.beta * omega * omega - 2.0 * omega).abs() < 1e-6);
+        }
+    }
+}
