@@ -46,15 +46,8 @@ fn whole_step(c: &mut Criterion) {
 fn kernels(c: &mut Criterion) {
     let coefficients = SpringCoefficients { stiffness: 100.0, damping: 0.01 };
     let springs = Some(coefficients);
-    let material = ClothMaterial {
-        density: 0.2,
-        stretch: springs,
-        shear: springs,
-        bend: springs,
-        membrane: None,
-        bending: None,
-        grain_deg: 0.0,
-    };
+    let material =
+        ClothMaterial { density: 0.2, stretch: springs, shear: springs, bend: springs, membrane: None, bending: None };
     let mut group = c.benchmark_group("kernels");
     group.sample_size(20);
     for n in SIZES {

@@ -15,6 +15,7 @@
 pub mod builders;
 pub mod cli;
 pub mod components;
+pub mod fabrics;
 pub mod io;
 pub mod resources;
 pub mod scene;

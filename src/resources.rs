@@ -11,6 +11,7 @@ use crate::builders::tear::Cut;
 use crate::solver::contact::GroundPlane;
 use crate::solver::forces::Air;
 use crate::solver::integrate::{Integrator, MethodSettings};
+use crate::solver::probes::ClothProbe;
 
 /// How time advances: a frame is `substeps` steps of `dt`.
 #[derive(Resource, Debug, Clone, Copy, PartialEq)]
@@ -95,6 +96,10 @@ impl Probes {
         self.values.get(name).copied()
     }
 }
+
+/// The measurements of particular cloths the scene asked for.
+#[derive(Resource, Debug, Clone, Default, PartialEq)]
+pub struct ProbeRequests(pub Vec<ClothProbe>);
 
 /// Work the integrators did, summed over the run.
 #[derive(Resource, Debug, Clone, Copy, Default, PartialEq)]

@@ -4,8 +4,8 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 
 use super::forces::{ForceElements, ForceEnvironment};
-use crate::components::{Cloth, MembraneTriangles, Particles, Pins, SolverWorkspace, Springs};
-use crate::resources::{DivergenceLimit, HealthProblem, HealthReport, Probes, SimClock};
+use crate::components::{Cloth, MembraneTriangles, Particles, Pins, SolverWorkspace, Springs, Triangles};
+use crate::resources::{DivergenceLimit, HealthProblem, HealthReport, ProbeRequests, Probes, SimClock};
 use crate::schedule::{FrameSystems, SimSchedules};
 use crate::solver::health::check_health;
 use crate::solver::pins::pin_reaction;
@@ -65,6 +65,21 @@ pub fn measure_probes(
     probes.set("pin_force_n", f64::from(pin_force.length()));
 }
 
+/// Measures the cloth probes the scene asked for (cantilever angle, drape coefficient,
+/// mean stress). Runs in [`FrameSystems::Finish`].
+pub fn measure_cloth_probes(
+    requests: Res<ProbeRequests>,
+    mut probes: ResMut<Probes>,
+    cloths: Query<(&Cloth, &Particles, &Triangles, &MembraneTriangles)>,
+) {
+    for request in &requests.0 {
+        if let Some((_, particles, triangles, membranes)) = cloths.iter().find(|(c, ..)| c.name == request.cloth()) {
+            let value = request.measure(&particles.position, &particles.rest_position, &triangles.indices, membranes);
+            probes.set(request.name(), value);
+        }
+    }
+}
+
 /// Counts the frame. Runs in [`FrameSystems::Finish`], last.
 pub fn count_frame(mut clock: ResMut<SimClock>) {
     clock.frame += 1;
@@ -72,5 +87,7 @@ pub fn count_frame(mut clock: ResMut<SimClock>) {
 
 /// Adds this module's systems.
 pub fn add_to(schedules: &mut SimSchedules) {
-    schedules.frame.add_systems((check_cloth_health, measure_probes, count_frame).chain().in_set(FrameSystems::Finish));
+    schedules.frame.add_systems(
+        (check_cloth_health, measure_probes, measure_cloth_probes, count_frame).chain().in_set(FrameSystems::Finish),
+    );
 }

@@ -93,7 +93,7 @@ mod tests {
 
     fn material() -> ClothMaterial {
         let c = Some(SpringCoefficients { stiffness: 100.0, damping: 0.1 });
-        ClothMaterial { density: 0.2, stretch: c, shear: c, bend: c, membrane: None, bending: None, grain_deg: 0.0 }
+        ClothMaterial { density: 0.2, stretch: c, shear: c, bend: c, membrane: None, bending: None }
     }
 
     #[test]

@@ -178,7 +178,7 @@ mod tests {
 
     fn material() -> ClothMaterial {
         let c = Some(SpringCoefficients { stiffness: 10.0, damping: 0.0 });
-        ClothMaterial { density: 2.0, stretch: c, shear: c, bend: c, membrane: None, bending: None, grain_deg: 0.0 }
+        ClothMaterial { density: 2.0, stretch: c, shear: c, bend: c, membrane: None, bending: None }
     }
 
     #[test]

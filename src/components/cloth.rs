@@ -113,8 +113,4 @@ pub struct ClothMaterial {
     /// Bending hinges over interior edges.
     #[serde(default)]
     pub bending: Option<BendingDesc>,
-    /// Direction of the warp in the cloth's local XY plane, from local +X [degrees]; the
-    /// weft is perpendicular to it.
-    #[serde(default)]
-    pub grain_deg: f32,
 }

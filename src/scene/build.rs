@@ -3,6 +3,7 @@
 use std::path::Path;
 
 use bevy_ecs::prelude::*;
+use glam::Vec3;
 
 use super::format::{ClothDesc, EditActionDesc, RayleighDesc, Scene, ShapeDesc};
 use super::load::SceneError;
@@ -10,11 +11,12 @@ use super::validate::{TimePlan, time_plan};
 use crate::builders::ClothData;
 use crate::builders::grid::build_grid;
 use crate::builders::mesh::{build_from_mesh, read_obj};
+use crate::builders::pins::PinSelection;
 use crate::builders::tear::Cut;
 use crate::components::{Cloth, ClothTopology, Pins, RenderMesh, SolverWorkspace, UserForces};
 use crate::resources::{
-    AirSettings, DivergenceLimit, EditAction, Gravity, Ground, HealthReport, IntegratorStats, Probes, ScheduledEdit,
-    ScheduledEdits, SimClock, SolverSettings, StepSettings,
+    AirSettings, DivergenceLimit, EditAction, Gravity, Ground, HealthReport, IntegratorStats, ProbeRequests, Probes,
+    ScheduledEdit, ScheduledEdits, SimClock, SolverSettings, StepSettings,
 };
 use crate::solver::contact::GroundPlane;
 use crate::solver::forces::{Air, Gust};
@@ -42,19 +44,35 @@ pub struct SceneCounts {
 /// `base_dir`. `index` is the cloth's place in the scene, for error messages.
 pub fn build_cloth(desc: &ClothDesc, index: usize, base_dir: &Path) -> Result<ClothData, SceneError> {
     let placement = desc.placement.to_affine();
+    let material = desc
+        .resolved_material()
+        .ok_or_else(|| SceneError::invalid(format!("cloths[{index}]"), "give a material or a fabric"))?;
     let mut data = match &desc.shape {
-        ShapeDesc::Grid { size, resolution } => build_grid(*size, *resolution, placement, &desc.material),
+        ShapeDesc::Grid { size, resolution } => build_grid(*size, *resolution, placement, &material),
         ShapeDesc::Mesh { path } => {
             let field = format!("cloths[{index}].shape.path");
             let file = base_dir.join(path);
             let mesh = read_obj(&file).map_err(|e| SceneError::invalid(&field, e.to_string()))?;
-            build_from_mesh(&mesh, placement, &desc.material, &file.display().to_string())
+            build_from_mesh(&mesh, placement, &material, &file.display().to_string())
                 .map_err(|e| SceneError::invalid(&field, e.to_string()))?
         }
     };
     data.particles.velocity.fill(desc.velocity);
-    data.add_surface_elements(&desc.material, desc.placement.warp(desc.material.grain_deg));
+    data.add_surface_elements(&material, desc.placement.warp(desc.grain_deg));
     Ok(data)
+}
+
+/// Forces [N] that spread `traction` [N/m] along the polyline of particles `edge` (in
+/// order along the edge): each carries half of each rest segment beside it.
+fn edge_loads(rest: &[Vec3], edge: &[u32], traction: Vec3) -> Vec<(u32, Vec3)> {
+    let segment = |k: usize| (rest[edge[k + 1] as usize] - rest[edge[k] as usize]).length();
+    (0..edge.len())
+        .map(|k| {
+            let before = if k > 0 { segment(k - 1) } else { 0.0 };
+            let after = if k + 1 < edge.len() { segment(k) } else { 0.0 };
+            (edge[k], 0.5 * (before + after) * traction)
+        })
+        .collect()
 }
 
 /// Inserts the scene's resources into `world` and spawns its cloths.
@@ -74,6 +92,13 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
             }
         }
         let count = data.particles.len();
+        let mut user_forces: Vec<(u32, Vec3)> = desc.user_forces.iter().map(|f| (f.particle, f.force)).collect();
+        for (k, traction) in desc.tractions.iter().enumerate() {
+            let edge = PinSelection::Edge(traction.edge)
+                .resolve(&data.particles.rest_position, data.grid)
+                .map_err(|e| SceneError::invalid(format!("cloths[{index}].tractions[{k}].edge"), e.to_string()))?;
+            user_forces.extend(edge_loads(&data.particles.rest_position, &edge, traction.traction));
+        }
         if let Some((k, force)) = desc.user_forces.iter().enumerate().find(|(_, f)| f.particle as usize >= count) {
             return Err(SceneError::invalid(
                 format!("cloths[{index}].user_forces[{k}].particle"),
@@ -88,12 +113,12 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
         entities.push((
             (
                 Cloth { name: desc.name.clone(), grid: data.grid },
-                desc.material,
+                desc.resolved_material().expect("build_cloth refused cloths without one"),
                 data.particles,
                 data.springs,
                 data.triangles,
                 pins,
-                UserForces { forces: desc.user_forces.iter().map(|f| (f.particle, f.force)).collect() },
+                UserForces { forces: user_forces },
             ),
             (data.hinges, data.membranes, ClothTopology::default(), SolverWorkspace::default(), RenderMesh::default()),
         ));
@@ -152,5 +177,6 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
         .collect();
     pending.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
     world.insert_resource(ScheduledEdits { pending });
+    world.insert_resource(ProbeRequests(scene.probes.clone()));
     Ok(counts)
 }

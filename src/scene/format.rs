@@ -5,9 +5,11 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::builders::Placement;
-use crate::builders::pins::PinSelection;
+use crate::builders::pins::{GridEdge, PinSelection};
 use crate::components::ClothMaterial;
+use crate::fabrics::FabricDesc;
 use crate::solver::integrate::Integrator;
+use crate::solver::probes::ClothProbe;
 
 /// A whole run: world, cloths, solver, duration and outputs.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -40,6 +42,9 @@ pub struct Scene {
     /// Changes to cloths at given times: tears, pins, releases.
     #[serde(default)]
     pub edits: Vec<EditDesc>,
+    /// Measurements of particular cloths, reported beside the built-in probes.
+    #[serde(default)]
+    pub probes: Vec<ClothProbe>,
 }
 
 fn default_gravity() -> Vec3 {
@@ -167,8 +172,17 @@ pub struct ClothDesc {
     /// Where it goes.
     #[serde(default)]
     pub placement: Placement,
-    /// What it is made of.
-    pub material: ClothMaterial,
+    /// Direction of the warp in the cloth's local XY plane, from local +X [degrees]: how
+    /// the piece is cut from the fabric. The weft is perpendicular to it.
+    #[serde(default)]
+    pub grain_deg: f32,
+    /// What it is made of, element by element. Give this or `fabric`.
+    #[serde(default)]
+    pub material: Option<ClothMaterial>,
+    /// What it is made of, as a library fabric or textile measurements. Give this or
+    /// `material`.
+    #[serde(default)]
+    pub fabric: Option<FabricDesc>,
     /// Particles held in place from the start.
     #[serde(default)]
     pub pins: Vec<PinSelection>,
@@ -178,6 +192,27 @@ pub struct ClothDesc {
     /// Constant forces on chosen particles.
     #[serde(default)]
     pub user_forces: Vec<UserForceDesc>,
+    /// Constant loads per unit length along edges of a grid cloth.
+    #[serde(default)]
+    pub tractions: Vec<TractionDesc>,
+}
+
+/// A constant load spread along an edge of a grid cloth: each particle of the edge carries
+/// the traction times half the rest length of the edge segments beside it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TractionDesc {
+    /// The loaded edge.
+    pub edge: GridEdge,
+    /// Force per unit length [N/m].
+    pub traction: Vec3,
+}
+
+impl ClothDesc {
+    /// The element material: the one given, or the fabric's.
+    pub fn resolved_material(&self) -> Option<ClothMaterial> {
+        self.material.or_else(|| self.fabric.map(|f| f.measurements().material()))
+    }
 }
 
 /// How a cloth's particles, springs and triangles are made.

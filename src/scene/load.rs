@@ -99,6 +99,10 @@ impl SceneFile {
     }
 }
 
+/// RON extensions scenes are read and written with: optional values without `Some(…)`,
+/// and enum variants holding a struct written as `Variant(field: …)`.
+const SCENE_EXTENSIONS: Extensions = Extensions::IMPLICIT_SOME.union(Extensions::UNWRAP_VARIANT_NEWTYPES);
+
 /// Reads, parses and validates the scene at `path`.
 pub fn load_scene(path: &Path) -> Result<SceneFile, SceneError> {
     let text =
@@ -109,7 +113,7 @@ pub fn load_scene(path: &Path) -> Result<SceneFile, SceneError> {
 
 /// Parses and validates scene text; `path` is only used in messages.
 pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
-    let options = ron::Options::default().with_default_extension(Extensions::IMPLICIT_SOME);
+    let options = ron::Options::default().with_default_extension(SCENE_EXTENSIONS);
     let scene: Scene = options.from_str(text).map_err(|e| SceneError::Parse {
         path: path.display().to_string(),
         line: e.span.start.line,
@@ -122,7 +126,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
 
 /// Writes a scene as pretty RON that [`parse_scene`] reads back to the same scene.
 pub fn scene_to_ron(scene: &Scene) -> String {
-    let config = ron::ser::PrettyConfig::default().struct_names(true);
+    let config = ron::ser::PrettyConfig::default().struct_names(true).extensions(SCENE_EXTENSIONS);
     ron::ser::to_string_pretty(scene, config).expect("a scene is always serialisable")
 }
 

@@ -8,6 +8,8 @@ use super::format::{DEFAULT_SUBSTEPS, EditActionDesc, RayleighDesc, Scene, Shape
 use super::load::SceneError;
 use crate::builders::pins::PinSelection;
 use crate::components::{BendingLawDesc, MembraneDesc};
+use crate::fabrics::{BendingMeasurement, FabricDesc};
+use crate::solver::probes::ClothProbe;
 
 /// How a scene's time is cut into frames and steps.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -162,7 +164,22 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         finite_vec(&field("placement.translation"), cloth.placement.translation)?;
         finite_vec(&field("placement.rotation_deg"), cloth.placement.rotation_deg)?;
         positive(&field("placement.scale"), cloth.placement.scale)?;
-        let material = &cloth.material;
+        let material = &match (&cloth.material, &cloth.fabric) {
+            (Some(material), None) => *material,
+            (None, Some(fabric)) => {
+                check_fabric(&field("fabric"), fabric)?;
+                fabric.measurements().material()
+            }
+            (Some(_), Some(_)) => {
+                return Err(SceneError::invalid(field("fabric"), "give a material or a fabric, not both"));
+            }
+            (None, None) => {
+                return Err(SceneError::invalid(
+                    field("material"),
+                    "give a material (elements) or a fabric (library or measured)",
+                ));
+            }
+        };
         positive(&field("material.density"), material.density).map_err(|_| {
             SceneError::invalid(field("material.density"), format!("{} kg/m² would give particles no or negative mass; areal densities of fabric are about 0.05 to 0.5 kg/m²", material.density))
         })?;
@@ -207,8 +224,11 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
                 positive(&field("material.bending.law.kappa0"), kappa0)?;
             }
         }
-        finite(&field("material.grain_deg"), material.grain_deg)?;
+        finite(&field("grain_deg"), cloth.grain_deg)?;
         finite_vec(&field("velocity"), cloth.velocity)?;
+        for (k, traction) in cloth.tractions.iter().enumerate() {
+            finite_vec(&field(&format!("tractions[{k}].traction")), traction.traction)?;
+        }
         for (k, force) in cloth.user_forces.iter().enumerate() {
             finite_vec(&field(&format!("user_forces[{k}].force")), force.force)?;
         }
@@ -224,6 +244,30 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
     }
     positive("divergence.max_strain", scene.divergence.max_strain)?;
 
+    for (k, probe) in scene.probes.iter().enumerate() {
+        let field = |name: &str| format!("probes[{k}].{name}");
+        if !scene.cloths.iter().any(|c| c.name == probe.cloth()) {
+            return Err(SceneError::invalid(field("cloth"), format!("no cloth is named `{}`", probe.cloth())));
+        }
+        match probe {
+            ClothProbe::CantileverAngle { edge, direction, .. } => {
+                finite_vec(&field("edge"), *edge)?;
+                nonzero_vec(&field("direction"), *direction)?;
+            }
+            ClothProbe::DrapeCoefficient { pedestal_radius, specimen_radius, .. } => {
+                positive(&field("pedestal_radius"), *pedestal_radius)?;
+                if positive(&field("specimen_radius"), *specimen_radius)? <= *pedestal_radius {
+                    return Err(SceneError::invalid(
+                        field("specimen_radius"),
+                        "must be larger than the pedestal radius",
+                    ));
+                }
+            }
+            ClothProbe::MeanStress { direction, .. } => {
+                nonzero_vec(&field("direction"), *direction)?;
+            }
+        }
+    }
     for (k, edit) in scene.edits.iter().enumerate() {
         let field = |name: &str| format!("edits[{k}].{name}");
         non_negative(&field("at_s"), edit.at_s)?;
@@ -233,10 +277,7 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         match &edit.action {
             EditActionDesc::Tear { point, normal, radius } => {
                 finite_vec(&field("action.point"), *point)?;
-                finite_vec(&field("action.normal"), *normal)?;
-                if *normal == Vec3::ZERO {
-                    return Err(SceneError::invalid(field("action.normal"), "must not be zero"));
-                }
+                nonzero_vec(&field("action.normal"), *normal)?;
                 if let Some(radius) = radius {
                     positive(&field("action.radius"), *radius)?;
                 }
@@ -247,6 +288,34 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
                 }
             }
         }
+    }
+    Ok(())
+}
+
+fn check_fabric(field: &str, fabric: &FabricDesc) -> Result<(), SceneError> {
+    let FabricDesc::Measured(m) = fabric else { return Ok(()) };
+    let at = |name: &str| format!("{field}.{name}");
+    positive(&at("areal_density"), m.areal_density)?;
+    non_negative(&at("thickness"), m.thickness)?;
+    match m.bending {
+        BendingMeasurement::Rigidity { warp, weft } => {
+            non_negative(&at("bending.warp"), warp)?;
+            non_negative(&at("bending.weft"), weft)?;
+        }
+        BendingMeasurement::BendingLength { warp, weft } => {
+            positive(&at("bending.warp"), warp)?;
+            positive(&at("bending.weft"), weft)?;
+        }
+    }
+    for (name, value) in [("tensile_warp", m.tensile_warp), ("tensile_weft", m.tensile_weft), ("shear", m.shear)] {
+        if let Some(value) = value {
+            positive(&at(name), value)?;
+        }
+    }
+    if let Some(nu) = m.poisson
+        && !(0.0..0.5).contains(&nu)
+    {
+        return Err(SceneError::invalid(at("poisson"), format!("{nu} is outside [0, 0.5)")));
     }
     Ok(())
 }
@@ -284,6 +353,13 @@ fn non_negative(field: &str, value: f32) -> Result<f32, SceneError> {
     } else {
         Err(SceneError::invalid(field, format!("must not be negative, got {value}")))
     }
+}
+
+fn nonzero_vec(field: &str, value: Vec3) -> Result<Vec3, SceneError> {
+    if finite_vec(field, value)? == Vec3::ZERO {
+        return Err(SceneError::invalid(field, "must not be zero"));
+    }
+    Ok(value)
 }
 
 fn finite_vec(field: &str, value: Vec3) -> Result<Vec3, SceneError> {
