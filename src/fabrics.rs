@@ -141,7 +141,7 @@ impl FabricMeasurements {
                 d3: nu * (d1 * d2).sqrt(),
                 d4: self.shear.unwrap_or(DEFAULT_SHEAR),
             }),
-            bending: Some(BendingDesc { warp, weft, law: BendingLawDesc::Linear }),
+            bending: Some(BendingDesc { warp, weft, twist: None, law: BendingLawDesc::Linear }),
         }
     }
 }

@@ -35,7 +35,7 @@ impl ClothData {
     pub fn add_surface_elements(&mut self, material: &ClothMaterial, warp: Vec3) {
         let (x, triangles) = (&self.particles.position, &self.triangles.indices);
         if let Some(bending) = &material.bending {
-            self.hinges = surface::build_hinges(x, triangles, bending, warp);
+            self.hinges = surface::build_bending(x, triangles, bending, warp);
         }
         if let Some(membrane) = material.membrane {
             self.membranes = surface::build_membranes(x, triangles, membrane, warp);

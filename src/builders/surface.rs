@@ -4,10 +4,8 @@
 use glam::Vec3;
 
 use crate::components::{BendingDesc, BendingHinges, BendingLawDesc, MembraneDesc, MembraneTriangles};
-use crate::solver::elements::dual::V3;
-use crate::solver::elements::hinge::dihedral_angle;
-use crate::solver::elements::{BendingLaw, HingeElement, MembraneElement};
-use crate::solver::geometry::triangle_area;
+use crate::solver::elements::hinge::hinge_angle;
+use crate::solver::elements::{BendingFace, BendingLaw, BendingRigidity, MembraneElement, NO_HINGE};
 
 /// Regularisation of Zheng's law, as a fraction of κ₀: below κ₀/100 the law is linear.
 const ZHENG_REGULARISATION: f32 = 0.01;
@@ -55,41 +53,80 @@ pub fn interior_edges(triangles: &[[u32; 3]]) -> Vec<InteriorEdge> {
     edges
 }
 
-/// Bending hinges over the interior edges of a surface at rest positions `x`, with the
-/// rigidity of each interpolated between warp and weft by the direction it bends in:
-/// `B = B_warp cos²φ + B_weft sin²φ`, φ between the bending direction (in the surface,
-/// across the edge) and the warp.
-pub fn build_hinges(x: &[Vec3], triangles: &[[u32; 3]], bending: &BendingDesc, warp: Vec3) -> BendingHinges {
+/// Bending over a surface at rest positions `x`: a hinge on every interior edge and a
+/// face for every triangle with at least one, its coefficients in the warp/weft frame
+/// (warp along `warp`, projected on each triangle).
+pub fn build_bending(x: &[Vec3], triangles: &[[u32; 3]], bending: &BendingDesc, warp: Vec3) -> BendingHinges {
     let law = match bending.law {
         BendingLawDesc::Linear => BendingLaw::Linear,
         BendingLawDesc::Zheng { kappa0 } => BendingLaw::Zheng { kappa0, kappa_r: ZHENG_REGULARISATION * kappa0 },
     };
-    let mut hinges = BendingHinges { law, ..BendingHinges::default() };
+    let rigidity = BendingRigidity {
+        warp: bending.warp,
+        weft: bending.weft,
+        twist: bending.twist.unwrap_or(0.5 * (bending.warp * bending.weft).sqrt()),
+    };
+    let mut result = BendingHinges { law, rigidity, ..BendingHinges::default() };
+    // The hinge on each side of each triangle, side k running from corner k to corner k+1.
+    let mut sides = vec![[NO_HINGE; 3]; triangles.len()];
     for edge in interior_edges(triangles) {
+        let h = result.vertices.len() as u32;
         let vertices = [edge.o1, edge.o2, edge.i, edge.j];
-        let p = vertices.map(|v| x[v as usize]);
-        let area: f32 = edge
-            .triangles
-            .iter()
-            .map(|&t| {
-                let [a, b, c] = triangles[t as usize].map(|v| x[v as usize]);
-                triangle_area(a, b, c)
-            })
-            .sum();
-        let e = p[3] - p[2];
-        let normal = ((p[3] - p[2]).cross(p[0] - p[2]) + (p[2] - p[3]).cross(p[1] - p[3])).normalize_or_zero();
-        let across = e.cross(normal).normalize_or_zero();
-        let in_plane_warp = (warp - warp.dot(normal) * normal).normalize_or_zero();
-        let cos2 = across.dot(in_plane_warp).powi(2);
-        hinges.vertices.push(vertices);
-        hinges.elements.push(HingeElement {
-            rest_angle: dihedral_angle(p.map(|q| V3(q.to_array()))),
-            rigidity: bending.warp * cos2 + bending.weft * (1.0 - cos2),
+        result.vertices.push(vertices);
+        result.rest_angle.push(hinge_angle(vertices.map(|v| x[v as usize])));
+        for t in edge.triangles {
+            let tri = triangles[t as usize];
+            for k in 0..3 {
+                let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                if (a, b) == (edge.i, edge.j) || (a, b) == (edge.j, edge.i) {
+                    sides[t as usize][k] = h;
+                }
+            }
+        }
+    }
+    for (t, tri) in triangles.iter().enumerate() {
+        let hinges = sides[t];
+        if hinges.iter().all(|&h| h == NO_HINGE) {
+            continue;
+        }
+        let p = tri.map(|v| x[v as usize]);
+        let normal = (p[1] - p[0]).cross(p[2] - p[0]);
+        let area = 0.5 * normal.length();
+        let n = normal.normalize_or_zero();
+        let u = (warp - warp.dot(n) * n).normalize_or_zero();
+        let v = n.cross(u);
+        let coefficients = std::array::from_fn(|k| {
+            let side = p[(k + 1) % 3] - p[k];
+            let m = side.cross(n).normalize_or_zero();
+            let (m1, m2) = (m.dot(u), m.dot(v));
+            side.length() / (2.0 * area) * Vec3::new(m1 * m1, m2 * m2, 2.0 * m1 * m2)
+        });
+        let mut vertices = Vec::with_capacity(6);
+        for &h in hinges.iter().filter(|&&h| h != NO_HINGE) {
+            for v in result.vertices[h as usize] {
+                if !vertices.contains(&v) {
+                    vertices.push(v);
+                }
+            }
+        }
+        let corners = std::array::from_fn(|k| {
+            if hinges[k] == NO_HINGE {
+                return [0; 4];
+            }
+            result.vertices[hinges[k] as usize]
+                .map(|v| vertices.iter().position(|&w| w == v).expect("listed above") as u8)
+        });
+        let first = vertices[0];
+        vertices.resize(6, first);
+        result.faces.push(BendingFace {
+            hinges,
+            coefficients,
             area,
-            width: area / e.length(),
+            vertices: vertices.try_into().expect("six entries"),
+            corners,
         });
     }
-    hinges
+    result
 }
 
 /// Membrane triangles over a surface at rest positions `x`, warp along `warp`.
@@ -116,16 +153,40 @@ mod tests {
     }
 
     #[test]
-    fn hinge_rigidity_follows_the_bending_direction() {
-        // Edge along Y: bending across it runs along X, the warp: full warp rigidity.
-        let x = [Vec3::new(-1.0, 0.5, 0.0), Vec3::new(1.0, 0.5, 0.0), Vec3::ZERO, Vec3::Y];
-        let bending = BendingDesc { warp: 4.0, weft: 1.0, law: BendingLawDesc::Linear };
-        let hinges = build_hinges(&x, &[[2, 3, 0], [3, 2, 1]], &bending, Vec3::X);
-        assert_eq!(hinges.vertices, vec![[0, 1, 2, 3]]);
-        let h = hinges.elements[0];
-        assert!((h.rigidity - 4.0).abs() < 1e-6 && h.rest_angle.abs() < 1e-6);
-        assert!((h.area - 1.0).abs() < 1e-6 && (h.width - 1.0).abs() < 1e-6);
-        let across = build_hinges(&x, &[[2, 3, 0], [3, 2, 1]], &bending, Vec3::Y);
-        assert!((across.elements[0].rigidity - 1.0).abs() < 1e-6);
+    fn a_cylinder_bent_along_the_warp_stores_half_b_kappa_squared_per_area() {
+        // A 5 × 4 grid of 1 cm cells in the XY plane, bent about Y with curvature 20 /m.
+        let (columns, rows, s) = (5, 4, 0.01f32);
+        let rest: Vec<Vec3> =
+            (0..columns * rows).map(|i| Vec3::new((i % columns) as f32 * s, (i / columns) as f32 * s, 0.0)).collect();
+        let at = |c: usize, r: usize| (r * columns + c) as u32;
+        let mut triangles = Vec::new();
+        for r in 0..rows - 1 {
+            for c in 0..columns - 1 {
+                triangles.push([at(c, r), at(c + 1, r), at(c + 1, r + 1)]);
+                triangles.push([at(c, r), at(c + 1, r + 1), at(c, r + 1)]);
+            }
+        }
+        let desc = BendingDesc { warp: 3e-5, weft: 1e-5, twist: None, law: BendingLawDesc::Linear };
+        let bending = build_bending(&rest, &triangles, &desc, Vec3::X);
+        let kappa = 20.0f32;
+        let bent: Vec<Vec3> = rest
+            .iter()
+            .map(|p| Vec3::new((p.x * kappa).sin() / kappa, p.y, (1.0 - (p.x * kappa).cos()) / kappa))
+            .collect();
+        let view = bending.view();
+        let mut delta = vec![0.0; bending.vertices.len()];
+        view.angles(&bent, &mut delta);
+        let energy: f32 = (0..bending.faces.len()).map(|f| view.face_energy(f, &delta)).sum();
+        // Every triangle sees one bent side except the outer half of each end column, whose
+        // bent side would be the free boundary.
+        let area = ((columns - 2) * (rows - 1)) as f32 * s * s;
+        let expected = 0.5 * 3e-5 * kappa * kappa * area;
+        assert!((energy / expected - 1.0).abs() < 1e-3, "energy {energy:e}, continuum {expected:e}");
+        // Across the weft the weft rigidity applies.
+        let across = build_bending(&rest, &triangles, &desc, Vec3::Y);
+        let view = across.view();
+        view.angles(&bent, &mut delta);
+        let energy: f32 = (0..across.faces.len()).map(|f| view.face_energy(f, &delta)).sum();
+        assert!((energy / (expected / 3.0) - 1.0).abs() < 1e-3, "weft energy {energy:e}");
     }
 }

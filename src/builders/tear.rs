@@ -3,6 +3,7 @@
 use glam::Vec3;
 
 use crate::components::{BendingHinges, MembraneTriangles, Springs, Triangles};
+use crate::solver::elements::NO_HINGE;
 
 /// A cut: the plane through `point` with normal `normal`, limited to `radius` [m] around
 /// `point` when given.
@@ -63,9 +64,8 @@ pub fn tear(
     let removed_springs = springs.remove_where(|s| severs(&pairs[s]));
     let before = triangles.len();
     triangles.indices.retain(|t| !severs(t));
-    let keep: Vec<bool> = hinges.vertices.iter().map(|h| !severs(h)).collect();
     let hinges_before = hinges.vertices.len();
-    retain_parallel(&mut hinges.vertices, &mut hinges.elements, &keep);
+    cut_bending(hinges, |corners| severs(corners));
     let keep: Vec<bool> = membranes.indices.iter().map(|t| !severs(t)).collect();
     let membranes_before = membranes.indices.len();
     retain_parallel(&mut membranes.indices, &mut membranes.elements, &keep);
@@ -75,6 +75,29 @@ pub fn tear(
         hinges: hinges_before - hinges.vertices.len(),
         membranes: membranes_before - membranes.indices.len(),
     }
+}
+
+/// Removes the hinges and faces that `severs`, renumbering the faces' hinges; a face
+/// keeps its remaining sides.
+fn cut_bending(hinges: &mut BendingHinges, severs: impl Fn(&[u32]) -> bool) {
+    let keep: Vec<bool> = hinges.vertices.iter().map(|h| !severs(h)).collect();
+    let mut renumber = vec![NO_HINGE; keep.len()];
+    let mut next = 0;
+    for (h, &kept) in keep.iter().enumerate() {
+        if kept {
+            renumber[h] = next;
+            next += 1;
+        }
+    }
+    retain_parallel(&mut hinges.vertices, &mut hinges.rest_angle, &keep);
+    hinges.faces.retain_mut(|face| {
+        for h in &mut face.hinges {
+            if *h != NO_HINGE {
+                *h = renumber[*h as usize];
+            }
+        }
+        face.hinges.iter().any(|&h| h != NO_HINGE) && !severs(&face.vertices)
+    });
 }
 
 /// Keeps the entries of two parallel columns where `keep` is true.

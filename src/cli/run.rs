@@ -76,6 +76,7 @@ pub(super) fn run(path: &Path, out: Option<PathBuf>, frames: Option<u32>, quiet:
         triangles: counts.triangles,
         force_evaluations: stats.evaluations,
         rejected_steps: stats.rejected,
+        cg_iterations: stats.iterations,
         probes: simulation.probes().values.iter().map(|(k, v)| ((*k).to_owned(), *v)).collect(),
     };
     let summary_path = dir.join("summary.json");

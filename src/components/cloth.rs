@@ -80,6 +80,9 @@ pub struct BendingDesc {
     pub warp: f32,
     /// Rigidity for bending along the weft [N·m].
     pub weft: f32,
+    /// Twist rigidity [N·m]; `½ √(warp · weft)` when not given.
+    #[serde(default)]
+    pub twist: Option<f32>,
     /// The law; linear unless given.
     #[serde(default = "linear_law")]
     pub law: BendingLawDesc,

@@ -2,22 +2,48 @@
 
 use bevy_ecs::prelude::*;
 
-use crate::solver::elements::{BendingLaw, HingeElement, MembraneElement, MembraneMaterial};
+use crate::solver::elements::{
+    BendingFace, BendingLaw, BendingRigidity, BendingSurface, MembraneElement, MembraneMaterial,
+};
 
-/// Bending hinges over the interior edges of the cloth's surface (B3, Z2).
+/// Bending over the cloth's surface (B3, Z2): hinges on interior edges and the faces whose
+/// curvature their angles make (see [`crate::solver::elements::bending`]).
 #[derive(Component, Debug, Clone, PartialEq)]
 pub struct BendingHinges {
     /// `[o₁, o₂, i, j]` of each hinge (see [`crate::solver::elements::hinge`]).
     pub vertices: Vec<[u32; 4]>,
-    /// Rest angle, rigidity, area and width of each hinge.
-    pub elements: Vec<HingeElement>,
-    /// The moment–curvature law shared by all hinges.
+    /// Rest angle of each hinge [rad].
+    pub rest_angle: Vec<f32>,
+    /// The faces that bend.
+    pub faces: Vec<BendingFace>,
+    /// The moment–curvature law.
     pub law: BendingLaw,
+    /// Rigidities by direction.
+    pub rigidity: BendingRigidity,
 }
 
 impl Default for BendingHinges {
     fn default() -> Self {
-        Self { vertices: Vec::new(), elements: Vec::new(), law: BendingLaw::Linear }
+        Self {
+            vertices: Vec::new(),
+            rest_angle: Vec::new(),
+            faces: Vec::new(),
+            law: BendingLaw::Linear,
+            rigidity: BendingRigidity { warp: 0.0, weft: 0.0, twist: 0.0 },
+        }
+    }
+}
+
+impl BendingHinges {
+    /// The surface as the bending kernels see it.
+    pub fn view(&self) -> BendingSurface<'_> {
+        BendingSurface {
+            hinges: &self.vertices,
+            rest_angle: &self.rest_angle,
+            faces: &self.faces,
+            law: self.law,
+            rigidity: self.rigidity,
+        }
     }
 }
 

@@ -31,10 +31,12 @@ impl Csr {
         Self::build(row_count, items, |item, slot| item * N as u32 + slot)
     }
 
+    /// Builds rows from items that each touch up to `N` rows; entries equal to
+    /// `u32::MAX` are skipped.
     fn build<const N: usize>(row_count: usize, items: &[[u32; N]], entry: impl Fn(u32, u32) -> u32) -> Self {
         let mut offsets = vec![0u32; row_count + 1];
         for item in items {
-            for &p in item {
+            for &p in item.iter().filter(|&&p| p != u32::MAX) {
                 offsets[p as usize + 1] += 1;
             }
         }
@@ -44,7 +46,7 @@ impl Csr {
         let mut fill = offsets.clone();
         let mut rows = vec![0u32; offsets[row_count] as usize];
         for (index, item) in items.iter().enumerate() {
-            for (slot, &p) in item.iter().enumerate() {
+            for (slot, &p) in item.iter().enumerate().filter(|(_, p)| **p != u32::MAX) {
                 rows[fill[p as usize] as usize] = entry(index as u32, slot as u32);
                 fill[p as usize] += 1;
             }
@@ -68,6 +70,8 @@ pub struct ClothTopology {
     pub particle_triangles: Csr,
     /// Hinge corners `4 h + c` at each particle.
     pub particle_hinges: Csr,
+    /// Face sides `3 f + k` at each hinge: where a hinge's moment comes from.
+    pub hinge_faces: Csr,
     /// Membrane corners `3 t + c` at each particle.
     pub particle_membranes: Csr,
     /// Which 3×3 blocks the derivatives ∂f/∂x and ∂f/∂v have.
@@ -76,6 +80,8 @@ pub struct ClothTopology {
     pub spring_slots: Vec<[[u32; 2]; 2]>,
     /// Where each hinge's local blocks go.
     pub hinge_slots: Vec<[[u32; 4]; 4]>,
+    /// Where each bending face's local blocks go.
+    pub face_slots: Vec<[[u32; 6]; 6]>,
     /// Where each membrane triangle's local blocks go.
     pub membrane_slots: Vec<[[u32; 3]; 3]>,
     /// Inverse mass with pinned particles at zero [1/kg]: what the integrators accelerate.
@@ -102,7 +108,7 @@ impl ClothTopology {
                 .pairs
                 .iter()
                 .map(|p| &p[..])
-                .chain(hinges.vertices.iter().map(|h| &h[..]))
+                .chain(hinges.faces.iter().map(|f| &f.vertices[..]))
                 .chain(membranes.indices.iter().map(|t| &t[..])),
         );
         let mut free_inv_mass = inv_mass.to_vec();
@@ -113,9 +119,14 @@ impl ClothTopology {
             particle_springs: Csr::from_items(count, &springs.pairs),
             particle_triangles: Csr::from_items(count, &triangles.indices),
             particle_hinges: Csr::from_corners(count, &hinges.vertices),
+            hinge_faces: Csr::from_corners(
+                hinges.vertices.len(),
+                &hinges.faces.iter().map(|f| f.hinges).collect::<Vec<_>>(),
+            ),
             particle_membranes: Csr::from_corners(count, &membranes.indices),
             spring_slots: springs.pairs.iter().map(|&p| pattern.stencil_slots(p)).collect(),
             hinge_slots: hinges.vertices.iter().map(|&h| pattern.stencil_slots(h)).collect(),
+            face_slots: hinges.faces.iter().map(|f| pattern.stencil_slots(f.vertices)).collect(),
             membrane_slots: membranes.indices.iter().map(|&t| pattern.stencil_slots(t)).collect(),
             pattern,
             free_inv_mass,

@@ -41,6 +41,8 @@ pub struct Summary {
     pub force_evaluations: u64,
     /// Rejected adaptive steps over the run.
     pub rejected_steps: u64,
+    /// Conjugate-gradient iterations of the implicit methods over the run.
+    pub cg_iterations: u64,
     /// Probe values at the last frame, by name.
     pub probes: std::collections::BTreeMap<String, f64>,
 }

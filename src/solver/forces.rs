@@ -5,6 +5,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::PARALLEL_MIN_LEN;
+use super::elements::hinge::hinge_angle;
 use super::elements::{BlockMatrix, BlockPattern, SpringElement};
 use super::implicit::LinearDynamics;
 use super::integrate::Dynamics;
@@ -69,6 +70,9 @@ pub struct ForceScratch {
     spring: Vec<Vec3>,
     triangle: Vec<Vec3>,
     hinge: Vec<[Vec3; 4]>,
+    hinge_delta: Vec<f32>,
+    hinge_moment: Vec<f32>,
+    face_moment: Vec<[f32; 3]>,
     membrane: Vec<[Vec3; 3]>,
 }
 
@@ -112,6 +116,26 @@ impl ForceModel<'_> {
         self.air.drag + self.air.area_damping / self.density
     }
 
+    /// Angles away from rest and summed moments `∂E/∂θ` of every hinge, into `scratch`.
+    fn bending_moments(&self, x: &[Vec3], scratch: &mut ForceScratch) {
+        let bending = self.hinges.view();
+        let hinge_count = self.hinges.vertices.len();
+        scratch.hinge_delta.resize(hinge_count, 0.0);
+        scratch.hinge_delta.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(h, d)| {
+            *d = hinge_angle(self.hinges.vertices[h].map(|p| x[p as usize])) - self.hinges.rest_angle[h];
+        });
+        let delta = &scratch.hinge_delta;
+        scratch.face_moment.resize(self.hinges.faces.len(), [0.0; 3]);
+        scratch.face_moment.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(f, m)| {
+            *m = bending.face_moments(f, delta);
+        });
+        let faces = &scratch.face_moment;
+        scratch.hinge_moment.resize(hinge_count, 0.0);
+        scratch.hinge_moment.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(h, m)| {
+            *m = self.topology.hinge_faces.row(h).iter().map(|&side| faces[side as usize / 3][side as usize % 3]).sum();
+        });
+    }
+
     /// Total force on every particle at state `(x, v)` and time `t` [s], written to `out`.
     pub fn eval(&self, x: &[Vec3], v: &[Vec3], t: f32, scratch: &mut ForceScratch, out: &mut [Vec3]) {
         scratch.spring.resize(self.springs.len(), Vec3::ZERO);
@@ -120,10 +144,12 @@ impl ForceModel<'_> {
             *f = self.spring(s).force(x[i], x[j], v[i], v[j]);
         });
 
-        let law = self.hinges.law;
+        self.bending_moments(x, scratch);
+        let bending = self.hinges.view();
+        let moments = &scratch.hinge_moment;
         scratch.hinge.resize(self.hinges.vertices.len(), [Vec3::ZERO; 4]);
         scratch.hinge.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(h, f)| {
-            *f = self.hinges.elements[h].forces(law, self.hinges.vertices[h].map(|p| x[p as usize]));
+            *f = bending.hinge_forces(h, x, moments[h]);
         });
 
         let material = &self.membranes.material;
@@ -170,7 +196,8 @@ impl ForceModel<'_> {
 
     /// Forces (as [`ForceModel::eval`]) and the derivatives ∂f/∂x and ∂f/∂v over the
     /// topology's pattern. With `definite`, each element gives the semi-definite variant of
-    /// its stiffness that conjugate gradients need. Wind is left out of the derivatives:
+    /// its stiffness that conjugate gradients need (for bending: the faces' Gauss–Newton
+    /// blocks without the hinges' angle-curvature term). Wind is left out of the derivatives:
     /// implicit solvers treat it explicitly.
     pub fn assemble(
         &self,
@@ -198,10 +225,14 @@ impl ForceModel<'_> {
                 dfdv.add_local(slots, &[[d, -d], [-d, d]]);
             }
         }
-        let law = self.hinges.law;
-        for (h, slots) in topology.hinge_slots.iter().enumerate() {
-            let corners = self.hinges.vertices[h].map(|p| x[p as usize]);
-            dfdx.add_local(slots, &self.hinges.elements[h].position_jacobian(law, corners, definite));
+        let bending = self.hinges.view();
+        for (f, slots) in topology.face_slots.iter().enumerate() {
+            dfdx.add_local(slots, &bending.face_jacobian(f, x, &scratch.hinge_delta));
+        }
+        if !definite {
+            for (h, slots) in topology.hinge_slots.iter().enumerate() {
+                dfdx.add_local(slots, &bending.hinge_curvature_jacobian(h, x, scratch.hinge_moment[h]));
+            }
         }
         let material = &self.membranes.material;
         for (m, slots) in topology.membrane_slots.iter().enumerate() {
@@ -224,10 +255,10 @@ impl ForceModel<'_> {
                 f64::from(self.spring(s).energy(x[i], x[j]))
             })
             .sum();
-        let law = self.hinges.law;
-        let hinges: f64 = (self.hinges.vertices.iter().zip(&self.hinges.elements))
-            .map(|(h, e)| f64::from(e.energy(law, h.map(|p| x[p as usize]))))
-            .sum();
+        let bending = self.hinges.view();
+        let mut delta = vec![0.0; self.hinges.vertices.len()];
+        bending.angles(x, &mut delta);
+        let hinges: f64 = (0..self.hinges.faces.len()).map(|f| f64::from(bending.face_energy(f, &delta))).sum();
         let material = &self.membranes.material;
         let membranes: f64 = (self.membranes.indices.iter().zip(&self.membranes.elements))
             .map(|(t, e)| f64::from(e.energy(material, t.map(|p| x[p as usize]))))

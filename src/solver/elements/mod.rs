@@ -3,6 +3,7 @@
 //! block-descent solvers share one implementation. Each element is tested against finite
 //! differences of its own energy and forces.
 
+pub mod bending;
 pub mod block;
 pub mod dual;
 pub mod hinge;
@@ -12,7 +13,7 @@ pub mod spring;
 #[cfg(test)]
 pub(crate) mod testing;
 
+pub use bending::{BendingFace, BendingLaw, BendingRigidity, BendingSurface, NO_HINGE};
 pub use block::{BlockMatrix, BlockPattern};
-pub use hinge::{BendingLaw, HingeElement};
 pub use membrane::{MembraneElement, MembraneMaterial};
 pub use spring::SpringElement;
