@@ -8,6 +8,7 @@ pub mod geometry;
 pub mod health;
 pub mod implicit;
 pub mod integrate;
+pub mod ordering;
 pub mod pins;
 pub mod probes;
 
