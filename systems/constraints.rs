@@ -1,10 +1,12 @@
-//! Holding pinned particles.
+//! Constraints after each step: pins, then strain limits.
 
 use bevy_ecs::prelude::*;
 
-use crate::components::{Particles, Pins};
+use crate::components::{ClothTopology, Particles, Pins, SolverWorkspace, StrainLimit};
+use crate::resources::StepSettings;
 use crate::schedule::{SimSchedules, SubstepSystems};
 use crate::solver::pins::hold_pins;
+use crate::solver::strain_limit::{LimitedEdges, limit_strain};
 
 /// Puts pinned particles back on their targets at rest. Runs in
 /// [`SubstepSystems::Constraints`].
@@ -15,7 +17,30 @@ pub fn hold_pinned_particles(mut cloths: Query<(&mut Particles, &Pins)>) {
     }
 }
 
+/// Projects the limited edges of every cloth back to their strain limit, after the pins.
+/// Runs in [`SubstepSystems::Constraints`].
+pub fn limit_cloth_strain(
+    settings: Res<StepSettings>,
+    mut cloths: Query<(&mut Particles, &StrainLimit, &ClothTopology, &mut SolverWorkspace)>,
+) {
+    for (mut particles, limit, topology, mut workspace) in &mut cloths {
+        if limit.pairs.is_empty() {
+            continue;
+        }
+        let edges = LimitedEdges {
+            pairs: &limit.pairs,
+            rest_length: &limit.rest_length,
+            max_strain: limit.max_strain,
+            iterations: limit.iterations,
+        };
+        let Particles { position, velocity, .. } = &mut *particles;
+        limit_strain(&edges, &topology.free_inv_mass, settings.dt, position, velocity, &mut workspace.positions);
+    }
+}
+
 /// Adds this module's systems.
 pub fn add_to(schedules: &mut SimSchedules) {
-    schedules.substep.add_systems(hold_pinned_particles.in_set(SubstepSystems::Constraints));
+    schedules
+        .substep
+        .add_systems((hold_pinned_particles, limit_cloth_strain).chain().in_set(SubstepSystems::Constraints));
 }

@@ -3,7 +3,7 @@
 use bevy_ecs::prelude::*;
 
 use crate::builders::tear::tear;
-use crate::components::{BendingHinges, Cloth, MembraneTriangles, Particles, Pins, Springs, Triangles};
+use crate::components::{BendingHinges, Cloth, MembraneTriangles, Particles, Pins, Springs, StrainLimit, Triangles};
 use crate::resources::{EditAction, ScheduledEdits, SimClock, StepSettings};
 use crate::schedule::{FrameSystems, SimSchedules};
 
@@ -23,6 +23,7 @@ pub fn apply_scheduled_edits(
         &mut Triangles,
         &mut BendingHinges,
         &mut MembraneTriangles,
+        &mut StrainLimit,
         &mut Pins,
     )>,
 ) {
@@ -32,14 +33,14 @@ pub fn apply_scheduled_edits(
         return;
     }
     for edit in edits.pending.drain(..due) {
-        let Some((cloth, particles, mut springs, mut triangles, mut hinges, mut membranes, mut pins)) =
+        let Some((cloth, particles, mut springs, mut triangles, mut hinges, mut membranes, mut limit, mut pins)) =
             cloths.iter_mut().find(|(cloth, ..)| cloth.name == edit.cloth)
         else {
             continue;
         };
         match &edit.action {
             EditAction::Tear(cut) => {
-                tear(cut, &particles.position, &mut springs, &mut triangles, &mut hinges, &mut membranes);
+                tear(cut, &particles.position, &mut springs, &mut triangles, &mut hinges, &mut membranes, &mut limit);
             }
             EditAction::Pin(selections) => {
                 for particle in

@@ -3,7 +3,9 @@
 
 use glam::Vec3;
 
-use crate::components::{BendingDesc, BendingHinges, BendingLawDesc, MembraneDesc, MembraneTriangles};
+use crate::components::{
+    BendingDesc, BendingHinges, BendingLawDesc, MembraneDesc, MembraneTriangles, SpringKind, Springs,
+};
 use crate::solver::elements::hinge::hinge_angle;
 use crate::solver::elements::{BendingFace, BendingLaw, BendingRigidity, MembraneElement, NO_HINGE};
 
@@ -127,6 +129,48 @@ pub fn build_bending(x: &[Vec3], triangles: &[[u32; 3]], bending: &BendingDesc, 
         });
     }
     result
+}
+
+/// How close to the warp or weft an edge must run to count as a warp or weft edge: 10°.
+const GRAIN_ALIGNMENT: f32 = 0.985;
+
+/// The edges whose strain a strain limit bounds. With `grain_only`: the structural
+/// springs if there are any, else the triangle sides along the warp or the weft, else every
+/// side (a mesh with no edges along the grain). Otherwise: every spring if there are any,
+/// else every triangle side. Returns pairs and rest lengths.
+pub fn limited_edges(
+    x: &[Vec3],
+    springs: &Springs,
+    triangles: &[[u32; 3]],
+    warp: Vec3,
+    grain_only: bool,
+) -> (Vec<[u32; 2]>, Vec<f32>) {
+    let length = |[i, j]: [u32; 2]| (x[i as usize] - x[j as usize]).length();
+    let structural: Vec<[u32; 2]> = springs
+        .pairs
+        .iter()
+        .zip(&springs.kind)
+        .filter(|(_, k)| !grain_only || **k == SpringKind::Structural)
+        .map(|(p, _)| *p)
+        .collect();
+    if !structural.is_empty() {
+        let rest = structural.iter().map(|&p| length(p)).collect();
+        return (structural, rest);
+    }
+    let mut sides: Vec<[u32; 2]> =
+        triangles.iter().flat_map(|&[a, b, c]| [[a, b], [b, c], [c, a]]).map(|[i, j]| [i.min(j), i.max(j)]).collect();
+    sides.sort_unstable();
+    sides.dedup();
+    let along_grain = |[i, j]: [u32; 2]| {
+        let d = (x[j as usize] - x[i as usize]).normalize_or_zero();
+        let normal = warp.cross(d).length();
+        // |cos| to the warp, or to the weft (|sin| to the warp, within the plane).
+        d.dot(warp).abs() >= GRAIN_ALIGNMENT || normal >= GRAIN_ALIGNMENT && d.dot(warp).abs() <= 1.0 - GRAIN_ALIGNMENT
+    };
+    let aligned: Vec<[u32; 2]> = sides.iter().copied().filter(|&p| grain_only && along_grain(p)).collect();
+    let chosen = if aligned.is_empty() { sides } else { aligned };
+    let rest = chosen.iter().map(|&p| length(p)).collect();
+    (chosen, rest)
 }
 
 /// Membrane triangles over a surface at rest positions `x`, warp along `warp`.

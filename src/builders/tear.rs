@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use crate::components::{BendingHinges, MembraneTriangles, Springs, Triangles};
+use crate::components::{BendingHinges, MembraneTriangles, Springs, StrainLimit, Triangles};
 use crate::solver::elements::NO_HINGE;
 
 /// A cut: the plane through `point` with normal `normal`, limited to `radius` [m] around
@@ -49,8 +49,8 @@ pub struct Torn {
     pub membranes: usize,
 }
 
-/// Removes every spring, triangle, hinge and membrane triangle that `cut` severs at
-/// positions `x`.
+/// Removes every spring, triangle, hinge, membrane triangle and limited edge that `cut`
+/// severs at positions `x`.
 pub fn tear(
     cut: &Cut,
     x: &[Vec3],
@@ -58,12 +58,15 @@ pub fn tear(
     triangles: &mut Triangles,
     hinges: &mut BendingHinges,
     membranes: &mut MembraneTriangles,
+    limit: &mut StrainLimit,
 ) -> Torn {
     let severs = |corners: &[u32]| cut.severs(&corners.iter().map(|&p| x[p as usize]).collect::<Vec<_>>());
     let pairs = springs.pairs.clone();
     let removed_springs = springs.remove_where(|s| severs(&pairs[s]));
     let before = triangles.len();
     triangles.indices.retain(|t| !severs(t));
+    let keep: Vec<bool> = limit.pairs.iter().map(|p| !severs(p)).collect();
+    retain_parallel(&mut limit.pairs, &mut limit.rest_length, &keep);
     let hinges_before = hinges.vertices.len();
     cut_bending(hinges, |corners| severs(corners));
     let keep: Vec<bool> = membranes.indices.iter().map(|t| !severs(t)).collect();
@@ -122,12 +125,13 @@ mod tests {
         springs.push([0, 2], 5.0, 1.0, 0.0, SpringKind::Structural);
         let mut triangles = Triangles { indices: vec![[0, 1, 3]] };
         let cut = Cut { point: Vec3::new(0.5, 0.0, 0.0), normal: Vec3::X, radius: Some(1.0) };
-        let (mut hinges, mut membranes) = (BendingHinges::default(), MembraneTriangles::default());
-        let torn = tear(&cut, &x, &mut springs, &mut triangles, &mut hinges, &mut membranes);
+        let (mut hinges, mut membranes, mut limit) =
+            (BendingHinges::default(), MembraneTriangles::default(), StrainLimit::default());
+        let torn = tear(&cut, &x, &mut springs, &mut triangles, &mut hinges, &mut membranes, &mut limit);
         assert_eq!((torn.springs, torn.triangles), (1, 0));
         assert_eq!(springs.pairs, vec![[2, 3], [0, 2]]);
         let everywhere = Cut { radius: None, ..cut };
-        let torn = tear(&everywhere, &x, &mut springs, &mut triangles, &mut hinges, &mut membranes);
+        let torn = tear(&everywhere, &x, &mut springs, &mut triangles, &mut hinges, &mut membranes, &mut limit);
         assert_eq!((torn.springs, torn.triangles), (1, 1));
     }
 }

@@ -67,3 +67,16 @@ impl Default for MembraneTriangles {
         }
     }
 }
+
+/// Edges whose strain is limited after every step (Z8).
+#[derive(Component, Debug, Clone, Default, PartialEq)]
+pub struct StrainLimit {
+    /// Limited particle pairs: warp and weft edges.
+    pub pairs: Vec<[u32; 2]>,
+    /// Their rest lengths [m].
+    pub rest_length: Vec<f32>,
+    /// Largest strain allowed [-]; no limit when the list is empty.
+    pub max_strain: f32,
+    /// Most projection sweeps per step.
+    pub iterations: u32,
+}

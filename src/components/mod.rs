@@ -12,7 +12,7 @@ mod triangles;
 mod user_forces;
 
 pub use cloth::{BendingDesc, BendingLawDesc, Cloth, ClothMaterial, MembraneDesc, SpringCoefficients};
-pub use elements::{BendingHinges, MembraneTriangles};
+pub use elements::{BendingHinges, MembraneTriangles, StrainLimit};
 pub use particles::Particles;
 pub use pins::Pins;
 pub use springs::{SpringKind, Springs};

@@ -145,6 +145,8 @@ pub struct SolverWorkspace {
     pub forces: ForceScratch,
     /// Forces at an intermediate state [N], for stage evaluations and probes.
     pub force: Vec<Vec3>,
+    /// Positions at the start of the strain limiter's projection [m].
+    pub positions: Vec<Vec3>,
 }
 
 /// What an embedding renderer needs each frame: vertex normals beside the particle

@@ -5,15 +5,16 @@ use std::path::Path;
 use bevy_ecs::prelude::*;
 use glam::Vec3;
 
-use super::format::{ClothDesc, EditActionDesc, RayleighDesc, Scene, ShapeDesc};
+use super::format::{ClothDesc, EditActionDesc, LimitedEdgesDesc, RayleighDesc, Scene, ShapeDesc};
 use super::load::SceneError;
 use super::validate::{TimePlan, time_plan};
 use crate::builders::ClothData;
 use crate::builders::grid::build_grid;
 use crate::builders::mesh::{build_from_mesh, read_obj};
 use crate::builders::pins::PinSelection;
+use crate::builders::surface::limited_edges;
 use crate::builders::tear::Cut;
-use crate::components::{Cloth, ClothTopology, Pins, RenderMesh, SolverWorkspace, UserForces};
+use crate::components::{Cloth, ClothTopology, Pins, RenderMesh, SolverWorkspace, StrainLimit, UserForces};
 use crate::resources::{
     AirSettings, DivergenceLimit, EditAction, Gravity, Ground, HealthReport, IntegratorStats, ProbeRequests, Probes,
     ScheduledEdit, ScheduledEdits, SimClock, SolverSettings, StepSettings,
@@ -105,6 +106,16 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
                 format!("particle {} does not exist: the cloth has {count} particles", force.particle),
             ));
         }
+        let strain_limit = desc.strain_limit.map_or_else(StrainLimit::default, |limit| {
+            let (pairs, rest_length) = limited_edges(
+                &data.particles.rest_position,
+                &data.springs,
+                &data.triangles.indices,
+                desc.placement.warp(desc.grain_deg),
+                limit.edges == LimitedEdgesDesc::Grain,
+            );
+            StrainLimit { pairs, rest_length, max_strain: limit.max_strain, iterations: limit.iterations }
+        });
         counts.cloths += 1;
         counts.particles += count;
         counts.springs += data.springs.len();
@@ -120,7 +131,14 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
                 pins,
                 UserForces { forces: user_forces },
             ),
-            (data.hinges, data.membranes, ClothTopology::default(), SolverWorkspace::default(), RenderMesh::default()),
+            (
+                data.hinges,
+                data.membranes,
+                strain_limit,
+                ClothTopology::default(),
+                SolverWorkspace::default(),
+                RenderMesh::default(),
+            ),
         ));
     }
     world.spawn_batch(entities);

@@ -195,6 +195,38 @@ pub struct ClothDesc {
     /// Constant loads per unit length along edges of a grid cloth.
     #[serde(default)]
     pub tractions: Vec<TractionDesc>,
+    /// A bound on warp and weft strain, enforced after every step.
+    #[serde(default)]
+    pub strain_limit: Option<StrainLimitDesc>,
+}
+
+/// Strain limiting: edges are projected back to at most `max_strain` after every step.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StrainLimitDesc {
+    /// Largest strain [-], for example 0.01 for 1 %.
+    pub max_strain: f32,
+    /// Which edges: all of them (Provot's edge limiting, the default) or those along the
+    /// warp and weft (Zheng's, leaving shear free).
+    #[serde(default)]
+    pub edges: LimitedEdgesDesc,
+    /// Most projection sweeps per step.
+    #[serde(default = "default_limit_iterations")]
+    pub iterations: u32,
+}
+
+/// The edges a strain limit bounds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum LimitedEdgesDesc {
+    /// Every spring, or every triangle side.
+    #[default]
+    All,
+    /// Structural springs, or triangle sides along the warp or weft.
+    Grain,
+}
+
+fn default_limit_iterations() -> u32 {
+    100
 }
 
 /// A constant load spread along an edge of a grid cloth: each particle of the edge carries

@@ -226,6 +226,12 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         }
         finite(&field("grain_deg"), cloth.grain_deg)?;
         finite_vec(&field("velocity"), cloth.velocity)?;
+        if let Some(limit) = cloth.strain_limit {
+            positive(&field("strain_limit.max_strain"), limit.max_strain)?;
+            if limit.iterations == 0 {
+                return Err(SceneError::invalid(field("strain_limit.iterations"), "must be at least 1"));
+            }
+        }
         for (k, traction) in cloth.tractions.iter().enumerate() {
             finite_vec(&field(&format!("tractions[{k}].traction")), traction.traction)?;
         }

@@ -11,6 +11,7 @@ pub mod integrate;
 pub mod ordering;
 pub mod pins;
 pub mod probes;
+pub mod strain_limit;
 
 /// Below this many items a parallel loop runs on one thread: splitting costs more than it
 /// saves on small cloths.
