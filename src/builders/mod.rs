@@ -1,6 +1,7 @@
 //! Builders that turn descriptions into cloth data: grids, meshes from OBJ files, pin
 //! selections and cuts.
 
+pub mod disk;
 pub mod grid;
 pub mod mesh;
 pub mod pins;

@@ -48,6 +48,14 @@ pub enum PinSelection {
         /// Upper corner [m].
         max: Vec3,
     },
+    /// Every particle within `radius` [m] of `centre` (world coordinates): a clamp disk
+    /// like Cusick's pedestal.
+    WithinRadius {
+        /// Centre [m].
+        centre: Vec3,
+        /// Radius [m].
+        radius: f32,
+    },
 }
 
 /// Why a selection selects nothing sensible.
@@ -62,15 +70,13 @@ pub enum SelectionError {
         count: usize,
     },
     /// A named corner or edge on a cloth that is not a grid.
-    #[error("corners and edges are named on grid cloths only; use Indices or InBox for a mesh")]
+    #[error("corners and edges are named on grid cloths only; use Indices, InBox or WithinRadius for a mesh")]
     NotAGrid,
-    /// A box with no particle inside.
-    #[error("the box from {min} to {max} contains no particle")]
-    EmptyBox {
-        /// Lower corner.
-        min: Vec3,
-        /// Upper corner.
-        max: Vec3,
+    /// A region with no particle inside.
+    #[error("the {region} contains no particle")]
+    Empty {
+        /// The region, in words.
+        region: String,
     },
 }
 
@@ -107,23 +113,31 @@ impl PinSelection {
                     GridEdge::Right => (0..rows).map(|r| grid_index(columns, columns - 1, r)).collect(),
                 }
             }
-            PinSelection::InBox { min, max } => {
-                let inside: Vec<u32> = positions
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, p)| p.cmpge(*min).all() && p.cmple(*max).all())
-                    .map(|(i, _)| i as u32)
-                    .collect();
-                if inside.is_empty() {
-                    return Err(SelectionError::EmptyBox { min: *min, max: *max });
-                }
-                inside
-            }
+            PinSelection::InBox { min, max } => within(
+                positions,
+                |p| p.cmpge(*min).all() && p.cmple(*max).all(),
+                || format!("box from {min} to {max}"),
+            )?,
+            PinSelection::WithinRadius { centre, radius } => within(
+                positions,
+                |p| p.distance(*centre) <= *radius,
+                || format!("ball of radius {radius} m around {centre}"),
+            )?,
         };
         chosen.sort_unstable();
         chosen.dedup();
         Ok(chosen)
     }
+}
+
+/// The particles at positions where `inside` holds; an error naming the region if none.
+fn within(
+    positions: &[Vec3],
+    inside: impl Fn(Vec3) -> bool,
+    region: impl Fn() -> String,
+) -> Result<Vec<u32>, SelectionError> {
+    let chosen: Vec<u32> = (0..positions.len() as u32).filter(|&i| inside(positions[i as usize])).collect();
+    if chosen.is_empty() { Err(SelectionError::Empty { region: region() }) } else { Ok(chosen) }
 }
 
 #[cfg(test)]
@@ -150,5 +164,9 @@ mod tests {
         let positions = vec![Vec3::ZERO, Vec3::ONE, Vec3::splat(2.0)];
         let chosen = PinSelection::InBox { min: Vec3::splat(0.5), max: Vec3::splat(3.0) }.resolve(&positions, None);
         assert_eq!(chosen, Ok(vec![1, 2]));
+        let chosen = PinSelection::WithinRadius { centre: Vec3::ZERO, radius: 1.8 }.resolve(&positions, None);
+        assert_eq!(chosen, Ok(vec![0, 1]));
+        let none = PinSelection::WithinRadius { centre: Vec3::splat(9.0), radius: 0.1 }.resolve(&positions, None);
+        assert!(none.is_err_and(|e| e.to_string().contains("ball of radius 0.1 m")));
     }
 }

@@ -9,6 +9,7 @@ use super::format::{ClothDesc, EditActionDesc, LimitedEdgesDesc, RayleighDesc, S
 use super::load::SceneError;
 use super::validate::{TimePlan, time_plan};
 use crate::builders::ClothData;
+use crate::builders::disk::disk_mesh;
 use crate::builders::grid::build_grid;
 use crate::builders::mesh::{build_from_mesh, read_obj};
 use crate::builders::pins::PinSelection;
@@ -50,6 +51,8 @@ pub fn build_cloth(desc: &ClothDesc, index: usize, base_dir: &Path) -> Result<Cl
         .ok_or_else(|| SceneError::invalid(format!("cloths[{index}]"), "give a material or a fabric"))?;
     let mut data = match &desc.shape {
         ShapeDesc::Grid { size, resolution } => build_grid(*size, *resolution, placement, &material),
+        ShapeDesc::Disk { radius, rings } => build_from_mesh(&disk_mesh(*radius, *rings), placement, &material, "disk")
+            .map_err(|e| SceneError::invalid(format!("cloths[{index}].shape"), e.to_string()))?,
         ShapeDesc::Mesh { path } => {
             let field = format!("cloths[{index}].shape.path");
             let file = base_dir.join(path);

@@ -259,6 +259,15 @@ pub enum ShapeDesc {
         /// Particles along the width and the height, each ≥ 2.
         resolution: (u32, u32),
     },
+    /// A disk of `radius` [m] in the local XY plane, centred on the origin: a centre
+    /// particle and `rings` concentric rings, ring k holding 6k particles, so triangles stay
+    /// near equilateral from the centre out.
+    Disk {
+        /// Radius [m].
+        radius: f32,
+        /// Number of rings, ≥ 1.
+        rings: u32,
+    },
     /// A triangle mesh from an OBJ file, relative to the scene file's folder.
     Mesh {
         /// Path of the OBJ file.

@@ -155,6 +155,12 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
                     ));
                 }
             }
+            ShapeDesc::Disk { radius, rings } => {
+                positive(&field("shape.radius"), *radius)?;
+                if *rings == 0 {
+                    return Err(SceneError::invalid(field("shape.rings"), "a disk needs at least one ring"));
+                }
+            }
             ShapeDesc::Mesh { path } => {
                 if path.is_empty() {
                     return Err(SceneError::invalid(field("shape.path"), "must name an OBJ file"));
@@ -327,6 +333,10 @@ fn check_fabric(field: &str, fabric: &FabricDesc) -> Result<(), SceneError> {
 }
 
 fn check_selection(field: &str, selection: &PinSelection) -> Result<(), SceneError> {
+    if let PinSelection::WithinRadius { centre, radius } = selection {
+        finite_vec(field, *centre)?;
+        positive(field, *radius)?;
+    }
     if let PinSelection::InBox { min, max } = selection {
         finite_vec(field, *min)?;
         finite_vec(field, *max)?;
