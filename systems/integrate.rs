@@ -6,11 +6,13 @@ use super::forces::{ForceElements, ForceEnvironment};
 use crate::components::{Cloth, Particles, SolverWorkspace};
 use crate::resources::{HealthProblem, HealthReport, IntegratorStats, SolverSettings, StepSettings};
 use crate::schedule::{SimSchedules, SubstepSystems};
+use crate::solver::cfl::cfl_step;
 use crate::solver::forces::ClothDynamics;
-use crate::solver::integrate::step;
+use crate::solver::integrate::{Dynamics, StepReport, step};
 
 /// Integrates each cloth from the forces of [`SubstepSystems::Forces`], re-evaluating the
-/// force model at intermediate states for multi-stage methods. A step the integrator
+/// force model at intermediate states for multi-stage methods, and splitting the step by
+/// the CFL limit when the scene asks for Zheng's adaptive step. A step the integrator
 /// cannot complete is reported to the [`HealthReport`]. Runs in [`SubstepSystems::Integrate`].
 pub fn integrate_cloths(
     settings: Res<StepSettings>,
@@ -29,18 +31,39 @@ pub fn integrate_cloths(
         }
         let mut x = std::mem::take(&mut particles.position);
         let mut v = std::mem::take(&mut particles.velocity);
+        let (material, springs, _, _, membranes, topology, _) = elements;
+        // Zheng's adaptive step: split the step into equal sub-steps no longer than the
+        // CFL limit of the cloth as it is now.
+        let splits = match (solver.method.cfl, solver.integrator.is_implicit()) {
+            (Some(alpha), false) => cfl_step(alpha, &x, material.density, springs, membranes)
+                .map_or(1, |limit| (settings.dt / limit).ceil().max(1.0) as u32),
+            _ => 1,
+        };
+        let h = settings.dt / splits as f32;
         let model = environment.model(&particles.inv_mass, elements);
-        let mut dynamics = ClothDynamics { model, free_inv_mass: &elements.5.free_inv_mass, scratch: forces };
-        let result = step(
-            solver.integrator,
-            &mut dynamics,
-            &mut x,
-            &mut v,
-            environment.time(),
-            settings.dt,
-            &solver.method,
-            integrator,
-        );
+        let mut dynamics = ClothDynamics { model, free_inv_mass: &topology.free_inv_mass, scratch: forces };
+        let mut result = Ok(StepReport::default());
+        for split in 0..splits {
+            let t = environment.time() + split as f32 * h;
+            if split > 0 {
+                dynamics.acceleration(&x, &v, t, &mut integrator.start_acceleration);
+            }
+            result = step(solver.integrator, &mut dynamics, &mut x, &mut v, t, h, &solver.method, integrator).map(
+                |report| {
+                    let total = result.unwrap_or_default();
+                    StepReport {
+                        accepted: total.accepted + report.accepted,
+                        rejected: total.rejected + report.rejected,
+                        evaluations: total.evaluations + report.evaluations + u32::from(split > 0),
+                        iterations: total.iterations + report.iterations,
+                        max_error_ratio: total.max_error_ratio.max(report.max_error_ratio),
+                    }
+                },
+            );
+            if result.is_err() {
+                break;
+            }
+        }
         particles.position = x;
         particles.velocity = v;
         match result {

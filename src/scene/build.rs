@@ -163,6 +163,7 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
     world.insert_resource(SolverSettings {
         integrator: scene.solver.integrator,
         method: MethodSettings {
+            cfl: scene.solver.cfl,
             tolerance: scene.solver.tolerance,
             implicit: ImplicitSettings {
                 theta: scene.solver.theta,

@@ -102,6 +102,9 @@ pub struct SolverDesc {
     pub cg_max_iterations: u32,
     /// Newton iterations per implicit step (1: linearly implicit).
     pub newton_iterations: u32,
+    /// Courant number α of Zheng's adaptive step for explicit methods (Z4): each step is
+    /// split so that no sub-step exceeds `α Δx √(ρ/E)`, Δx the shortest current edge.
+    pub cfl: Option<f32>,
 }
 
 impl Default for SolverDesc {
@@ -116,6 +119,7 @@ impl Default for SolverDesc {
             cg_tolerance: 1e-4,
             cg_max_iterations: 500,
             newton_iterations: 1,
+            cfl: None,
         }
     }
 }

@@ -121,6 +121,14 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
     if cg >= 1.0 || scene.solver.cg_max_iterations == 0 {
         return Err(SceneError::invalid("solver.cg_tolerance", "needs a tolerance below 1 and at least one iteration"));
     }
+    if let Some(alpha) = scene.solver.cfl
+        && positive("solver.cfl", alpha)? > 1.0
+    {
+        return Err(SceneError::invalid(
+            "solver.cfl",
+            format!("{alpha} is above 1; the CFL limit needs α ≤ 1 (0.5 is safe)"),
+        ));
+    }
     let tolerance = positive("solver.tolerance", scene.solver.tolerance)?;
     if tolerance >= 1.0 {
         return Err(SceneError::invalid(

@@ -40,6 +40,11 @@ pub enum Integrator {
 }
 
 impl Integrator {
+    /// Whether the method solves a linear system each step.
+    pub fn is_implicit(self) -> bool {
+        matches!(self, Integrator::ImplicitEuler | Integrator::Newmark)
+    }
+
     /// Every integrator, for listings and tests.
     pub const ALL: [Integrator; 9] = [
         Integrator::ExplicitEuler,
@@ -112,11 +117,15 @@ pub struct MethodSettings {
     /// θ, Rayleigh damping and solver settings of the implicit methods. For
     /// [`Integrator::ImplicitEuler`] θ is 1 whatever is given here.
     pub implicit: ImplicitSettings,
+    /// Courant number α of Zheng's adaptive step for the explicit methods: each step is
+    /// split into sub-steps of at most `α Δx √(ρ/E)` ([`super::cfl`]). `None`: no split.
+    pub cfl: Option<f32>,
 }
 
 impl Default for MethodSettings {
     fn default() -> Self {
         Self {
+            cfl: None,
             tolerance: 1e-4,
             implicit: ImplicitSettings {
                 theta: 0.5,

@@ -1,6 +1,7 @@
 //! Pure kernels over slices: forces, integrators, constraints, contact, probes. Nothing
 //! here touches the ECS, so every kernel can be tested and benchmarked on plain data.
 
+pub mod cfl;
 pub mod contact;
 pub mod elements;
 pub mod forces;
