@@ -44,14 +44,14 @@ pub fn apply_scheduled_edits(
             }
             EditAction::Pin(selections) => {
                 for particle in
-                    selections.iter().flat_map(|s| s.resolve(&particles.position, cloth.grid).unwrap_or_default())
+                    selections.iter().flat_map(|s| s.resolve(&particles.position, &cloth.layout).unwrap_or_default())
                 {
                     pins.insert(particle, particles.position[particle as usize]);
                 }
             }
             EditAction::Unpin(selections) => {
                 for particle in
-                    selections.iter().flat_map(|s| s.resolve(&particles.position, cloth.grid).unwrap_or_default())
+                    selections.iter().flat_map(|s| s.resolve(&particles.position, &cloth.layout).unwrap_or_default())
                 {
                     pins.remove(particle);
                 }

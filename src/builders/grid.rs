@@ -4,7 +4,8 @@ use glam::{Affine3A, Vec3};
 
 use super::ClothData;
 use crate::components::{
-    BendingHinges, ClothMaterial, MembraneTriangles, Particles, SpringCoefficients, SpringKind, Springs, Triangles,
+    BendingHinges, ClothMaterial, MembraneTriangles, ParticleLayout, Particles, SpringCoefficients, SpringKind,
+    Springs, Triangles,
 };
 use crate::solver::geometry::lumped_masses;
 
@@ -83,7 +84,7 @@ pub fn build_grid(
         triangles: Triangles { indices: triangles },
         hinges: BendingHinges::default(),
         membranes: MembraneTriangles::default(),
-        grid: Some(resolution),
+        layout: ParticleLayout { grid: Some(resolution), renumbered: Vec::new() },
     }
 }
 

@@ -8,7 +8,8 @@ use glam::{Affine3A, Vec3};
 use super::ClothData;
 use super::surface::interior_edges;
 use crate::components::{
-    BendingHinges, ClothMaterial, MembraneTriangles, Particles, SpringCoefficients, SpringKind, Springs, Triangles,
+    BendingHinges, ClothMaterial, MembraneTriangles, ParticleLayout, Particles, SpringCoefficients, SpringKind,
+    Springs, Triangles,
 };
 use crate::solver::geometry::{lumped_masses, triangle_area};
 
@@ -107,7 +108,8 @@ fn obj_index(word: &str, vertex_count: usize) -> Option<u32> {
     (0..vertex_count as i64).contains(&resolved).then_some(resolved as u32)
 }
 
-/// Builds a cloth from `mesh` placed by `placement`. Vertices on no face are dropped.
+/// Builds a cloth from `mesh` placed by `placement`. Vertices on no face are dropped; the
+/// layout then maps the file's vertex numbers to particles (`u32::MAX` for dropped ones).
 /// Refuses meshes without faces and faces of zero area, which would carry no mass.
 pub fn build_from_mesh(
     mesh: &TriangleMesh,
@@ -134,6 +136,7 @@ pub fn build_from_mesh(
         }
     }
     let triangles: Vec<[u32; 3]> = mesh.triangles.iter().map(|t| t.map(|p| remap[p as usize])).collect();
+    let dropped = positions.len() < mesh.positions.len();
     for (index, tri) in triangles.iter().enumerate() {
         let [a, b, c] = tri.map(|p| positions[p as usize]);
         if triangle_area(a, b, c) <= 1e-12 {
@@ -166,7 +169,7 @@ pub fn build_from_mesh(
         triangles: Triangles { indices: triangles },
         hinges: BendingHinges::default(),
         membranes: MembraneTriangles::default(),
-        grid: None,
+        layout: ParticleLayout { grid: None, renumbered: if dropped { remap } else { Vec::new() } },
     })
 }
 

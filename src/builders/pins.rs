@@ -4,6 +4,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use super::grid::grid_index;
+use crate::components::ParticleLayout;
 
 /// A corner of a grid cloth. Rows run along the grid's local +Y (bottom is row 0),
 /// columns along local +X (left is column 0).
@@ -69,6 +70,12 @@ pub enum SelectionError {
         /// How many particles there are.
         count: usize,
     },
+    /// A mesh vertex that no face uses, so it is no particle.
+    #[error("vertex {index} of the mesh is on no face, so it is not part of the cloth")]
+    NotOnSurface {
+        /// The index given.
+        index: u32,
+    },
     /// A named corner or edge on a cloth that is not a grid.
     #[error("corners and edges are named on grid cloths only; use Indices, InBox or WithinRadius for a mesh")]
     NotAGrid,
@@ -81,16 +88,22 @@ pub enum SelectionError {
 }
 
 impl PinSelection {
-    /// The particles selected, sorted and unique, among `positions` of a cloth that is a
-    /// grid of `grid = (columns, rows)` if it is one.
-    pub fn resolve(&self, positions: &[Vec3], grid: Option<(u32, u32)>) -> Result<Vec<u32>, SelectionError> {
+    /// The particles selected, sorted and unique, among `positions` of a cloth laid out as
+    /// `layout` (grid regions; indices in the source mesh's numbering).
+    pub fn resolve(&self, positions: &[Vec3], layout: &ParticleLayout) -> Result<Vec<u32>, SelectionError> {
         let count = positions.len();
+        let grid = layout.grid;
         let mut chosen = match self {
             PinSelection::Indices(indices) => {
-                if let Some(&index) = indices.iter().find(|&&i| i as usize >= count) {
-                    return Err(SelectionError::OutOfRange { index, count });
-                }
-                indices.clone()
+                let range = if layout.renumbered.is_empty() { count } else { layout.renumbered.len() };
+                indices
+                    .iter()
+                    .map(|&index| match layout.particle(index) {
+                        _ if index as usize >= range => Err(SelectionError::OutOfRange { index, count: range }),
+                        u32::MAX => Err(SelectionError::NotOnSurface { index }),
+                        particle => Ok(particle),
+                    })
+                    .collect::<Result<_, _>>()?
             }
             PinSelection::Corners(corners) => {
                 let (columns, rows) = grid.ok_or(SelectionError::NotAGrid)?;
@@ -147,26 +160,32 @@ mod tests {
     #[test]
     fn named_regions_of_a_three_by_two_grid() {
         let positions = vec![Vec3::ZERO; 6];
-        let grid = Some((3, 2));
-        let resolve = |s: PinSelection| s.resolve(&positions, grid).expect("valid");
+        let grid = ParticleLayout { grid: Some((3, 2)), renumbered: Vec::new() };
+        let resolve = |s: PinSelection| s.resolve(&positions, &grid).expect("valid");
         assert_eq!(resolve(PinSelection::Corners(vec![GridCorner::TopRight, GridCorner::BottomLeft])), vec![0, 5]);
         assert_eq!(resolve(PinSelection::Edge(GridEdge::Top)), vec![3, 4, 5]);
         assert_eq!(resolve(PinSelection::Edge(GridEdge::Right)), vec![2, 5]);
         assert_eq!(
-            PinSelection::Indices(vec![6]).resolve(&positions, grid),
+            PinSelection::Indices(vec![6]).resolve(&positions, &grid),
             Err(SelectionError::OutOfRange { index: 6, count: 6 })
         );
-        assert_eq!(PinSelection::Edge(GridEdge::Top).resolve(&positions, None), Err(SelectionError::NotAGrid));
+        let mesh = ParticleLayout::default();
+        assert_eq!(PinSelection::Edge(GridEdge::Top).resolve(&positions, &mesh), Err(SelectionError::NotAGrid));
+        let renumbered = ParticleLayout { grid: None, renumbered: vec![5, 4, 3, 2, 1, 0] };
+        assert_eq!(PinSelection::Indices(vec![0, 1]).resolve(&positions, &renumbered), Ok(vec![4, 5]));
     }
 
     #[test]
     fn a_box_selects_the_particles_inside_it() {
         let positions = vec![Vec3::ZERO, Vec3::ONE, Vec3::splat(2.0)];
-        let chosen = PinSelection::InBox { min: Vec3::splat(0.5), max: Vec3::splat(3.0) }.resolve(&positions, None);
+        let chosen = PinSelection::InBox { min: Vec3::splat(0.5), max: Vec3::splat(3.0) }
+            .resolve(&positions, &ParticleLayout::default());
         assert_eq!(chosen, Ok(vec![1, 2]));
-        let chosen = PinSelection::WithinRadius { centre: Vec3::ZERO, radius: 1.8 }.resolve(&positions, None);
+        let chosen = PinSelection::WithinRadius { centre: Vec3::ZERO, radius: 1.8 }
+            .resolve(&positions, &ParticleLayout::default());
         assert_eq!(chosen, Ok(vec![0, 1]));
-        let none = PinSelection::WithinRadius { centre: Vec3::splat(9.0), radius: 0.1 }.resolve(&positions, None);
+        let none = PinSelection::WithinRadius { centre: Vec3::splat(9.0), radius: 0.1 }
+            .resolve(&positions, &ParticleLayout::default());
         assert!(none.is_err_and(|e| e.to_string().contains("ball of radius 0.1 m")));
     }
 }

@@ -10,9 +10,26 @@ use crate::solver::elements::MembraneMaterial;
 pub struct Cloth {
     /// Name from the scene; edits and messages refer to the cloth by it.
     pub name: String,
+    /// How the cloth's particles relate to the way the user names them.
+    pub layout: ParticleLayout,
+}
+
+/// What particle numbers mean to a user: grid regions, and the numbering of a mesh file.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ParticleLayout {
     /// Grid resolution `(columns, rows)` when the cloth was built as a grid, so that named
     /// regions (corners, edges) keep their meaning; `None` for cloths built from meshes.
     pub grid: Option<(u32, u32)>,
+    /// For renumbered cloths, the particle number of each vertex of the source mesh (the
+    /// numbers a scene uses); empty when particles keep the source numbering.
+    pub renumbered: Vec<u32>,
+}
+
+impl ParticleLayout {
+    /// The particle that a user's particle number refers to.
+    pub fn particle(&self, source: u32) -> u32 {
+        self.renumbered.get(source as usize).copied().unwrap_or(source)
+    }
 }
 
 /// Stiffness and damping of one family of springs.

@@ -11,7 +11,7 @@ mod topology;
 mod triangles;
 mod user_forces;
 
-pub use cloth::{BendingDesc, BendingLawDesc, Cloth, ClothMaterial, MembraneDesc, SpringCoefficients};
+pub use cloth::{BendingDesc, BendingLawDesc, Cloth, ClothMaterial, MembraneDesc, ParticleLayout, SpringCoefficients};
 pub use elements::{BendingHinges, MembraneTriangles, StrainLimit};
 pub use particles::Particles;
 pub use pins::Pins;

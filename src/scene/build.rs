@@ -51,14 +51,20 @@ pub fn build_cloth(desc: &ClothDesc, index: usize, base_dir: &Path) -> Result<Cl
         .ok_or_else(|| SceneError::invalid(format!("cloths[{index}]"), "give a material or a fabric"))?;
     let mut data = match &desc.shape {
         ShapeDesc::Grid { size, resolution } => build_grid(*size, *resolution, placement, &material),
-        ShapeDesc::Disk { radius, rings } => build_from_mesh(&disk_mesh(*radius, *rings), placement, &material, "disk")
-            .map_err(|e| SceneError::invalid(format!("cloths[{index}].shape"), e.to_string()))?,
+        ShapeDesc::Disk { radius, rings } => {
+            let mut data = build_from_mesh(&disk_mesh(*radius, *rings), placement, &material, "disk")
+                .map_err(|e| SceneError::invalid(format!("cloths[{index}].shape"), e.to_string()))?;
+            data.renumber_for_locality();
+            data
+        }
         ShapeDesc::Mesh { path } => {
             let field = format!("cloths[{index}].shape.path");
             let file = base_dir.join(path);
             let mesh = read_obj(&file).map_err(|e| SceneError::invalid(&field, e.to_string()))?;
-            build_from_mesh(&mesh, placement, &material, &file.display().to_string())
-                .map_err(|e| SceneError::invalid(&field, e.to_string()))?
+            let mut data = build_from_mesh(&mesh, placement, &material, &file.display().to_string())
+                .map_err(|e| SceneError::invalid(&field, e.to_string()))?;
+            data.renumber_for_locality();
+            data
         }
     };
     data.particles.velocity.fill(desc.velocity);
@@ -89,25 +95,27 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
         let mut pins = Pins::default();
         for (k, selection) in desc.pins.iter().enumerate() {
             let chosen = selection
-                .resolve(&data.particles.position, data.grid)
+                .resolve(&data.particles.position, &data.layout)
                 .map_err(|e| SceneError::invalid(format!("cloths[{index}].pins[{k}]"), e.to_string()))?;
             for particle in chosen {
                 pins.insert(particle, data.particles.position[particle as usize]);
             }
         }
         let count = data.particles.len();
-        let mut user_forces: Vec<(u32, Vec3)> = desc.user_forces.iter().map(|f| (f.particle, f.force)).collect();
+        let mut user_forces = Vec::with_capacity(desc.user_forces.len());
+        for (k, force) in desc.user_forces.iter().enumerate() {
+            // The same numbering as pins by index: a mesh file's vertex numbers.
+            let particle =
+                PinSelection::Indices(vec![force.particle]).resolve(&data.particles.position, &data.layout).map_err(
+                    |e| SceneError::invalid(format!("cloths[{index}].user_forces[{k}].particle"), e.to_string()),
+                )?;
+            user_forces.push((particle[0], force.force));
+        }
         for (k, traction) in desc.tractions.iter().enumerate() {
             let edge = PinSelection::Edge(traction.edge)
-                .resolve(&data.particles.rest_position, data.grid)
+                .resolve(&data.particles.rest_position, &data.layout)
                 .map_err(|e| SceneError::invalid(format!("cloths[{index}].tractions[{k}].edge"), e.to_string()))?;
             user_forces.extend(edge_loads(&data.particles.rest_position, &edge, traction.traction));
-        }
-        if let Some((k, force)) = desc.user_forces.iter().enumerate().find(|(_, f)| f.particle as usize >= count) {
-            return Err(SceneError::invalid(
-                format!("cloths[{index}].user_forces[{k}].particle"),
-                format!("particle {} does not exist: the cloth has {count} particles", force.particle),
-            ));
         }
         let strain_limit = desc.strain_limit.map_or_else(StrainLimit::default, |limit| {
             let (pairs, rest_length) = limited_edges(
@@ -126,7 +134,7 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
         counts.pins += pins.len();
         entities.push((
             (
-                Cloth { name: desc.name.clone(), grid: data.grid },
+                Cloth { name: desc.name.clone(), layout: data.layout },
                 desc.resolved_material().expect("build_cloth refused cloths without one"),
                 data.particles,
                 data.springs,
