@@ -316,7 +316,102 @@ impl LinearDynamics for ClothDynamics<'_> {
 
 #[cfg(test)]
 mod tests {
+    use glam::{Affine3A, Mat3};
+
     use super::*;
+    use crate::builders::grid::build_grid;
+    use crate::components::{
+        BendingDesc, BendingLawDesc, ClothMaterial, MembraneDesc, Particles, SpringCoefficients, Triangles,
+    };
+
+    /// A 4 × 4 cloth with every element kind, deformed and moving, in drag.
+    fn cloth() -> (Particles, Springs, Triangles, BendingHinges, MembraneTriangles) {
+        let spring = Some(SpringCoefficients { stiffness: 40.0, damping: 0.3 });
+        let material = ClothMaterial {
+            density: 0.2,
+            stretch: spring,
+            shear: spring,
+            bend: None,
+            membrane: Some(MembraneDesc::Anisotropic { d1: 300.0, d2: 200.0, d3: 50.0, d4: 30.0 }),
+            bending: Some(BendingDesc {
+                warp: 2e-3,
+                weft: 1e-3,
+                twist: None,
+                law: BendingLawDesc::Zheng { kappa0: 30.0 },
+            }),
+        };
+        let mut data = build_grid((0.3, 0.3), (4, 4), Affine3A::IDENTITY, &material);
+        data.add_surface_elements(&material, Vec3::new(1.0, 0.3, 0.0).normalize());
+        let particles = &mut data.particles;
+        for (i, (x, v)) in particles.position.iter_mut().zip(particles.velocity.iter_mut()).enumerate() {
+            let f = i as f32;
+            *x += Vec3::new(0.01 * (f * 1.3).sin(), 0.012 * (f * 0.7).cos(), 0.3 * x.x * x.x + 0.02 * (f * 2.1).sin());
+            *v = Vec3::new((f * 0.9).cos(), (f * 1.7).sin(), 0.5 * (f * 0.4).cos());
+        }
+        (data.particles, data.springs, data.triangles, data.hinges, data.membranes)
+    }
+
+    #[test]
+    fn assembled_derivatives_match_differences_of_the_whole_force_model() {
+        let (particles, springs, triangles, hinges, membranes) = cloth();
+        let topology = ClothTopology::build(&particles.inv_mass, &springs, &triangles, &hinges, &membranes, &[], 1);
+        let model = ForceModel {
+            inv_mass: &particles.inv_mass,
+            density: 0.2,
+            springs: &springs,
+            triangles: &triangles.indices,
+            hinges: &hinges,
+            membranes: &membranes,
+            topology: &topology,
+            gravity: Vec3::new(0.0, -9.81, 0.0),
+            air: Air { drag: 0.7, area_damping: 0.1, ..Air::default() },
+            user_forces: &[],
+        };
+        let (x, v) = (&particles.position, &particles.velocity);
+        let n = x.len();
+        let mut scratch = ForceScratch::default();
+        let (mut force, mut dfdx, mut dfdv) = (vec![Vec3::ZERO; n], BlockMatrix::default(), BlockMatrix::default());
+        model.assemble(x, v, 0.0, false, &mut scratch, &mut force, &mut dfdx, &mut dfdv);
+        let force_at = |x: &[Vec3], v: &[Vec3]| {
+            let mut out = vec![Vec3::ZERO; n];
+            model.eval(x, v, 0.0, &mut ForceScratch::default(), &mut out);
+            out
+        };
+        let h = 1e-4;
+        for b in 0..n {
+            for axis in 0..3 {
+                let mut step = Vec3::ZERO;
+                step[axis] = h;
+                let (mut xp, mut xm) = (x.clone(), x.clone());
+                xp[b] += step;
+                xm[b] -= step;
+                // Forces are linear in velocity: a large step has no truncation error and
+                // keeps f32 rounding small.
+                let (mut vp, mut vm) = (v.clone(), v.clone());
+                vp[b] += 500.0 * step;
+                vm[b] -= 500.0 * step;
+                let (fxp, fxm, fvp, fvm) = (force_at(&xp, v), force_at(&xm, v), force_at(x, &vp), force_at(x, &vm));
+                for a in 0..n {
+                    let numeric_x = (fxp[a] - fxm[a]) / (2.0 * h);
+                    let numeric_v = (fvp[a] - fvm[a]) / (1000.0 * h);
+                    let column = |m: &BlockMatrix| {
+                        let block: Mat3 = m.block(&topology.pattern, a as u32, b as u32);
+                        block.col(axis)
+                    };
+                    let (analytic_x, analytic_v) = (column(&dfdx), column(&dfdv));
+                    let scale = numeric_x.length().max(analytic_x.length()).max(1.0);
+                    assert!(
+                        (analytic_x - numeric_x).length() <= 2e-2 * scale,
+                        "∂f{a}/∂x{b}[{axis}]: {analytic_x} against {numeric_x}"
+                    );
+                    assert!(
+                        (analytic_v - numeric_v).length() <= 1e-2 * numeric_v.length().max(0.1),
+                        "∂f{a}/∂v{b}[{axis}]: {analytic_v} against {numeric_v}"
+                    );
+                }
+            }
+        }
+    }
 
     #[test]
     fn wind_on_a_facing_triangle_is_drag_times_area_times_speed_squared() {
