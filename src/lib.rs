@@ -14,6 +14,7 @@
 
 pub mod builders;
 pub mod cli;
+pub mod collision;
 pub mod components;
 pub mod fabrics;
 pub mod io;

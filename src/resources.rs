@@ -8,7 +8,6 @@ use glam::Vec3;
 
 use crate::builders::pins::PinSelection;
 use crate::builders::tear::Cut;
-use crate::solver::contact::GroundPlane;
 use crate::solver::forces::Air;
 use crate::solver::integrate::{Integrator, MethodSettings};
 use crate::solver::probes::ClothProbe;
@@ -38,10 +37,6 @@ pub struct SolverSettings {
     /// Tolerances, θ, Rayleigh damping, solver limits.
     pub method: MethodSettings,
 }
-
-/// The ground plane, when the scene has one.
-#[derive(Resource, Debug, Clone, Copy, PartialEq, Default)]
-pub struct Ground(pub Option<GroundPlane>);
 
 /// Simulated time.
 #[derive(Resource, Debug, Clone, Copy, PartialEq, Default)]

@@ -1,23 +1,57 @@
-//! Contact of cloth with the ground.
+//! Contact of cloth with solid bodies.
 
 use bevy_ecs::prelude::*;
 
-use crate::components::Particles;
-use crate::resources::Ground;
-use crate::schedule::{SimSchedules, SubstepSystems};
-use crate::solver::contact::resolve_ground;
+use crate::collision::body_contact::{ContactBody, resolve_body_contacts};
+use crate::components::{Cloth, ClothMaterial, ClothTopology, Collider, ContactStats, Particles};
+use crate::resources::{SimClock, StepSettings};
+use crate::schedule::{FrameSystems, SimSchedules, SubstepSystems};
 
-/// Keeps every particle above the ground plane, with friction. Runs in
-/// [`SubstepSystems::BodyContacts`].
-pub fn collide_with_ground(ground: Res<Ground>, mut cloths: Query<&mut Particles>) {
-    let Some(plane) = ground.0 else { return };
-    for mut particles in &mut cloths {
-        let Particles { position, velocity, .. } = &mut *particles;
-        resolve_ground(plane, position, velocity);
+/// Resolves every cloth's contacts with every collider at the end of the step (the
+/// colliders where they are then), and adds what they did to the cloth's
+/// [`ContactStats`]. Runs in [`SubstepSystems::BodyContacts`].
+pub fn collide_with_bodies(
+    clock: Res<SimClock>,
+    settings: Res<StepSettings>,
+    colliders: Query<&Collider>,
+    mut cloths: Query<(&Cloth, &ClothMaterial, &mut Particles, &ClothTopology, &mut ContactStats)>,
+) {
+    if colliders.is_empty() {
+        return;
+    }
+    let t = (clock.time_s + f64::from(settings.dt)) as f32;
+    for (cloth, material, mut particles, topology, mut stats) in &mut cloths {
+        let bodies: Vec<ContactBody<'_>> = colliders
+            .iter()
+            .map(|c| ContactBody {
+                shape: c.shape.as_ref(),
+                state: c.motion.state_at(t),
+                friction: c.friction,
+                thickness: c.thickness + cloth.thickness,
+            })
+            .collect();
+        let Particles { position, velocity, inv_mass, .. } = &mut *particles;
+        let density = material.density;
+        let area = |i: usize| 1.0 / (inv_mass[i] * density);
+        let totals =
+            resolve_body_contacts(&bodies, inv_mass, &topology.free_inv_mass, area, settings.dt, position, velocity);
+        stats.impulse += totals.impulse;
+        stats.normal_impulse += totals.normal_impulse;
+        stats.friction_impulse += totals.friction_impulse;
+        stats.contact_area += totals.contact_area;
+        stats.max_penetration = stats.max_penetration.max(totals.max_penetration);
+    }
+}
+
+/// Starts each frame's contact sums from zero. Runs in [`FrameSystems::Prepare`].
+pub fn reset_contact_stats(mut cloths: Query<&mut ContactStats>) {
+    for mut stats in &mut cloths {
+        *stats = ContactStats::default();
     }
 }
 
 /// Adds this module's systems.
 pub fn add_to(schedules: &mut SimSchedules) {
-    schedules.substep.add_systems(collide_with_ground.in_set(SubstepSystems::BodyContacts));
+    schedules.frame.add_systems(reset_contact_stats.in_set(FrameSystems::Prepare));
+    schedules.substep.add_systems(collide_with_bodies.in_set(SubstepSystems::BodyContacts));
 }

@@ -4,8 +4,10 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 
 use super::forces::{ForceElements, ForceEnvironment};
-use crate::components::{Cloth, MembraneTriangles, Particles, Pins, SolverWorkspace, Springs, Triangles};
-use crate::resources::{DivergenceLimit, HealthProblem, HealthReport, ProbeRequests, Probes, SimClock};
+use crate::components::{
+    Cloth, Collider, ContactStats, MembraneTriangles, Particles, Pins, SolverWorkspace, Springs, Triangles,
+};
+use crate::resources::{DivergenceLimit, HealthProblem, HealthReport, ProbeRequests, Probes, SimClock, StepSettings};
 use crate::schedule::{FrameSystems, SimSchedules};
 use crate::solver::health::check_health;
 use crate::solver::pins::pin_reaction;
@@ -80,6 +82,43 @@ pub fn measure_cloth_probes(
     }
 }
 
+/// Measures contact over the frame, when the scene has bodies: `contact_force_n`
+/// (magnitude of the frame-averaged vector sum of contact forces on all cloths),
+/// `contact_pressure_pa` and `friction_stress_pa` (mean normal and friction force per
+/// contact area), `max_penetration_m` (deepest particle inside a body). Runs in
+/// [`FrameSystems::Finish`].
+pub fn measure_contact_probes(
+    settings: Res<StepSettings>,
+    colliders: Query<(), With<Collider>>,
+    cloths: Query<&ContactStats>,
+    mut probes: ResMut<Probes>,
+) {
+    if colliders.is_empty() {
+        return;
+    }
+    let frame_time = f64::from(settings.dt) * f64::from(settings.substeps);
+    let total = cloths.iter().fold(ContactStats::default(), |mut sum, s| {
+        sum.impulse += s.impulse;
+        sum.normal_impulse += s.normal_impulse;
+        sum.friction_impulse += s.friction_impulse;
+        sum.contact_area += s.contact_area;
+        sum.max_penetration = sum.max_penetration.max(s.max_penetration);
+        sum
+    });
+    // Mean force over mean area: (ΣJ / T) / (ΣA / steps) = ΣJ / (dt ΣA).
+    let per_area = |impulse: f32| {
+        if total.contact_area > 0.0 {
+            f64::from(impulse) / (f64::from(settings.dt) * f64::from(total.contact_area))
+        } else {
+            0.0
+        }
+    };
+    probes.set("contact_force_n", f64::from(total.impulse.length()) / frame_time);
+    probes.set("contact_pressure_pa", per_area(total.normal_impulse));
+    probes.set("friction_stress_pa", per_area(total.friction_impulse));
+    probes.set("max_penetration_m", f64::from(total.max_penetration));
+}
+
 /// Counts the frame. Runs in [`FrameSystems::Finish`], last.
 pub fn count_frame(mut clock: ResMut<SimClock>) {
     clock.frame += 1;
@@ -88,6 +127,8 @@ pub fn count_frame(mut clock: ResMut<SimClock>) {
 /// Adds this module's systems.
 pub fn add_to(schedules: &mut SimSchedules) {
     schedules.frame.add_systems(
-        (check_cloth_health, measure_probes, measure_cloth_probes, count_frame).chain().in_set(FrameSystems::Finish),
+        (check_cloth_health, measure_probes, measure_cloth_probes, measure_contact_probes, count_frame)
+            .chain()
+            .in_set(FrameSystems::Finish),
     );
 }

@@ -12,6 +12,8 @@ pub struct Cloth {
     pub name: String,
     /// How the cloth's particles relate to the way the user names them.
     pub layout: ParticleLayout,
+    /// Distance its mid-surface keeps from solid bodies [m].
+    pub thickness: f32,
 }
 
 /// What particle numbers mean to a user: grid regions, and the numbering of a mesh file.

@@ -3,6 +3,7 @@
 //! [`Pins`], [`BendingHinges`], [`MembraneTriangles`], [`UserForces`] and [`ClothTopology`].
 
 mod cloth;
+mod collider;
 mod elements;
 mod particles;
 mod pins;
@@ -12,6 +13,7 @@ mod triangles;
 mod user_forces;
 
 pub use cloth::{BendingDesc, BendingLawDesc, Cloth, ClothMaterial, MembraneDesc, ParticleLayout, SpringCoefficients};
+pub use collider::{Collider, ContactStats};
 pub use elements::{BendingHinges, MembraneTriangles, StrainLimit};
 pub use particles::Particles;
 pub use pins::Pins;

@@ -15,12 +15,14 @@ use crate::builders::mesh::{build_from_mesh, read_obj};
 use crate::builders::pins::PinSelection;
 use crate::builders::surface::limited_edges;
 use crate::builders::tear::Cut;
-use crate::components::{Cloth, ClothTopology, Pins, RenderMesh, SolverWorkspace, StrainLimit, UserForces};
+use crate::collision::collider::{ColliderMotion, ColliderShape, Pose};
+use crate::components::{
+    Cloth, ClothTopology, Collider, ContactStats, Pins, RenderMesh, SolverWorkspace, StrainLimit, UserForces,
+};
 use crate::resources::{
-    AirSettings, DivergenceLimit, EditAction, Gravity, Ground, HealthReport, IntegratorStats, ProbeRequests, Probes,
+    AirSettings, DivergenceLimit, EditAction, Gravity, HealthReport, IntegratorStats, ProbeRequests, Probes,
     ScheduledEdit, ScheduledEdits, SimClock, SolverSettings, StepSettings,
 };
-use crate::solver::contact::GroundPlane;
 use crate::solver::forces::{Air, Gust};
 use crate::solver::implicit::{ImplicitSettings, Rayleigh};
 use crate::solver::integrate::MethodSettings;
@@ -85,6 +87,45 @@ fn edge_loads(rest: &[Vec3], edge: &[u32], traction: Vec3) -> Vec<(u32, Vec3)> {
         .collect()
 }
 
+/// Spawns the scene's colliders, the ground plane among them.
+fn spawn_colliders(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<(), SceneError> {
+    if scene.ground.enabled {
+        world.spawn(Collider {
+            name: "ground".into(),
+            shape: ColliderShape::Plane { normal: Vec3::Y }.build(None).expect("a plane always builds"),
+            motion: ColliderMotion::Static(Pose {
+                translation: Vec3::new(0.0, scene.ground.height, 0.0),
+                ..Pose::default()
+            }),
+            friction: scene.ground.friction,
+            thickness: 0.0,
+        });
+    }
+    for (k, desc) in scene.colliders.iter().enumerate() {
+        let field = format!("colliders[{k}].shape");
+        let mesh = match &desc.shape {
+            ColliderShape::Mesh { path } => {
+                Some(read_obj(&base_dir.join(path)).map_err(|e| SceneError::invalid(&field, e.to_string()))?)
+            }
+            _ => None,
+        };
+        let shape = desc.shape.build(mesh.as_ref()).map_err(|e| SceneError::invalid(&field, e.to_string()))?;
+        let motion = if desc.keyframes.is_empty() {
+            ColliderMotion::Static(desc.pose)
+        } else {
+            ColliderMotion::Keyframes(desc.keyframes.clone())
+        };
+        world.spawn(Collider {
+            name: desc.name.clone(),
+            shape,
+            motion,
+            friction: desc.friction,
+            thickness: desc.thickness,
+        });
+    }
+    Ok(())
+}
+
 /// Inserts the scene's resources into `world` and spawns its cloths.
 pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<SceneCounts, SceneError> {
     let time = time_plan(scene)?;
@@ -134,7 +175,7 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
         counts.pins += pins.len();
         entities.push((
             (
-                Cloth { name: desc.name.clone(), layout: data.layout },
+                Cloth { name: desc.name.clone(), layout: data.layout, thickness: desc.contact_thickness() },
                 desc.resolved_material().expect("build_cloth refused cloths without one"),
                 data.particles,
                 data.springs,
@@ -146,6 +187,7 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
                 data.hinges,
                 data.membranes,
                 strain_limit,
+                ContactStats::default(),
                 ClothTopology::default(),
                 SolverWorkspace::default(),
                 RenderMesh::default(),
@@ -182,9 +224,7 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
             },
         },
     });
-    world.insert_resource(Ground(
-        scene.ground.enabled.then_some(GroundPlane { height: scene.ground.height, friction: scene.ground.friction }),
-    ));
+    spawn_colliders(world, scene, base_dir)?;
     world.insert_resource(DivergenceLimit { max_strain: scene.divergence.max_strain });
     world.insert_resource(SimClock::default());
     world.insert_resource(HealthReport::default());

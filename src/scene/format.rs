@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::builders::Placement;
 use crate::builders::pins::{GridEdge, PinSelection};
+use crate::collision::collider::{ColliderShape, Pose};
 use crate::components::ClothMaterial;
 use crate::fabrics::FabricDesc;
 use crate::solver::integrate::Integrator;
@@ -33,6 +34,9 @@ pub struct Scene {
     /// The ground plane.
     #[serde(default)]
     pub ground: GroundDesc,
+    /// Solid bodies: static, or moving along keyframes.
+    #[serde(default)]
+    pub colliders: Vec<ColliderDesc>,
     /// What to write.
     #[serde(default)]
     pub output: OutputDesc,
@@ -193,6 +197,10 @@ pub struct ClothDesc {
     /// Initial velocity of every particle [m/s].
     #[serde(default)]
     pub velocity: Vec3,
+    /// Distance the cloth's mid-surface keeps from solid bodies [m]; the fabric's
+    /// thickness, or 1 mm, when not given.
+    #[serde(default)]
+    pub thickness: Option<f32>,
     /// Constant forces on chosen particles.
     #[serde(default)]
     pub user_forces: Vec<UserForceDesc>,
@@ -244,7 +252,15 @@ pub struct TractionDesc {
     pub traction: Vec3,
 }
 
+/// Contact thickness of a cloth without a fabric that gives one [m].
+pub const DEFAULT_THICKNESS: f32 = 1e-3;
+
 impl ClothDesc {
+    /// The contact thickness: as given, else the fabric's, else [`DEFAULT_THICKNESS`].
+    pub fn contact_thickness(&self) -> f32 {
+        self.thickness.or_else(|| self.fabric.map(|f| f.measurements().thickness)).unwrap_or(DEFAULT_THICKNESS)
+    }
+
     /// The element material: the one given, or the fabric's.
     pub fn resolved_material(&self) -> Option<ClothMaterial> {
         self.material.or_else(|| self.fabric.map(|f| f.measurements().material()))
@@ -287,6 +303,33 @@ pub struct UserForceDesc {
     pub particle: u32,
     /// Force [N].
     pub force: Vec3,
+}
+
+/// A solid body cloth collides with.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ColliderDesc {
+    /// Unique name.
+    pub name: String,
+    /// Shape in the collider's local frame.
+    pub shape: ColliderShape,
+    /// Where it is (or where it starts, with keyframes).
+    #[serde(default)]
+    pub pose: Pose,
+    /// Keyframes `(time [s], pose)`: the collider moves linearly between them and rests
+    /// outside them. Empty: it stays at `pose`.
+    #[serde(default)]
+    pub keyframes: Vec<(f32, Pose)>,
+    /// Coulomb friction coefficient against cloth [-].
+    #[serde(default = "default_friction")]
+    pub friction: f32,
+    /// Extra distance cloth keeps from its surface [m].
+    #[serde(default)]
+    pub thickness: f32,
+}
+
+fn default_friction() -> f32 {
+    0.5
 }
 
 /// The ground plane y = `height`.

@@ -7,6 +7,7 @@ use glam::Vec3;
 use super::format::{DEFAULT_SUBSTEPS, EditActionDesc, RayleighDesc, Scene, ShapeDesc};
 use super::load::SceneError;
 use crate::builders::pins::PinSelection;
+use crate::collision::collider::ColliderShape;
 use crate::components::{BendingLawDesc, MembraneDesc};
 use crate::fabrics::{BendingMeasurement, FabricDesc};
 use crate::solver::probes::ClothProbe;
@@ -240,6 +241,9 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         }
         finite(&field("grain_deg"), cloth.grain_deg)?;
         finite_vec(&field("velocity"), cloth.velocity)?;
+        if let Some(thickness) = cloth.thickness {
+            non_negative(&field("thickness"), thickness)?;
+        }
         if let Some(limit) = cloth.strain_limit {
             positive(&field("strain_limit.max_strain"), limit.max_strain)?;
             if limit.iterations == 0 {
@@ -257,6 +261,52 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         }
     }
 
+    for (k, collider) in scene.colliders.iter().enumerate() {
+        let field = |name: &str| format!("colliders[{k}].{name}");
+        if collider.name.is_empty() || scene.colliders[..k].iter().any(|c| c.name == collider.name) {
+            return Err(SceneError::invalid(field("name"), "collider names must be unique and not empty"));
+        }
+        non_negative(&field("friction"), collider.friction)?;
+        non_negative(&field("thickness"), collider.thickness)?;
+        for (pose_field, pose) in std::iter::once(("pose".to_owned(), &collider.pose))
+            .chain(collider.keyframes.iter().enumerate().map(|(j, (_, pose))| (format!("keyframes[{j}]"), pose)))
+        {
+            finite_vec(&field(&pose_field), pose.translation)?;
+            finite_vec(&field(&pose_field), pose.rotation_deg)?;
+        }
+        if collider.keyframes.windows(2).any(|w| w[1].0 <= w[0].0)
+            || collider.keyframes.iter().any(|k| !k.0.is_finite())
+        {
+            return Err(SceneError::invalid(field("keyframes"), "keyframe times must be finite and increasing"));
+        }
+        match &collider.shape {
+            ColliderShape::Plane { normal } => {
+                nonzero_vec(&field("shape.normal"), *normal)?;
+            }
+            ColliderShape::Sphere { radius } => {
+                positive(&field("shape.radius"), *radius)?;
+            }
+            ColliderShape::Capsule { half_height, radius } | ColliderShape::Cylinder { half_height, radius } => {
+                positive(&field("shape.half_height"), *half_height)?;
+                positive(&field("shape.radius"), *radius)?;
+            }
+            ColliderShape::Cuboid { half_extents } => {
+                if !(finite_vec(&field("shape.half_extents"), *half_extents)?.cmpgt(Vec3::ZERO).all()) {
+                    return Err(SceneError::invalid(field("shape.half_extents"), "every half extent must be positive"));
+                }
+            }
+            ColliderShape::ConvexHull { points } => {
+                for point in points {
+                    finite_vec(&field("shape.points"), *point)?;
+                }
+            }
+            ColliderShape::Mesh { path } => {
+                if path.is_empty() {
+                    return Err(SceneError::invalid(field("shape.path"), "must name an OBJ file"));
+                }
+            }
+        }
+    }
     finite("ground.height", scene.ground.height)?;
     non_negative("ground.friction", scene.ground.friction)?;
     if scene.output.every == 0 {

@@ -2,7 +2,6 @@
 //! here touches the ECS, so every kernel can be tested and benchmarked on plain data.
 
 pub mod cfl;
-pub mod contact;
 pub mod elements;
 pub mod forces;
 pub mod geometry;

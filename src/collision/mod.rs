@@ -1,0 +1,5 @@
+//! Contact of cloth with solid bodies: collider shapes and motions ([`collider`]) and the
+//! contact response kernel ([`body_contact`]). Pure: no ECS.
+
+pub mod body_contact;
+pub mod collider;

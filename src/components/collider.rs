@@ -1,0 +1,49 @@
+//! Solid bodies cloth collides with, and what contact did to a cloth over a frame.
+
+use bevy_ecs::prelude::*;
+use glam::Vec3;
+use parry3d::shape::SharedShape;
+
+use crate::collision::collider::ColliderMotion;
+
+/// A static or kinematic solid body (E5, D11, B5): a parry3d shape that moves along its
+/// motion. Its own entity.
+#[derive(Component, Clone)]
+pub struct Collider {
+    /// Name from the scene.
+    pub name: String,
+    /// The shape in its local frame.
+    pub shape: SharedShape,
+    /// Where it is over time.
+    pub motion: ColliderMotion,
+    /// Coulomb friction coefficient against cloth [-].
+    pub friction: f32,
+    /// Extra distance cloth keeps from its surface [m].
+    pub thickness: f32,
+}
+
+impl std::fmt::Debug for Collider {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Collider")
+            .field("name", &self.name)
+            .field("motion", &self.motion)
+            .field("friction", &self.friction)
+            .field("thickness", &self.thickness)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Contact of one cloth with the bodies, summed over the steps of the current frame.
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
+pub struct ContactStats {
+    /// Vector sum of the impulses on the cloth [N·s].
+    pub impulse: Vec3,
+    /// Sum of normal impulse magnitudes [N·s].
+    pub normal_impulse: f32,
+    /// Sum of friction impulse magnitudes [N·s].
+    pub friction_impulse: f32,
+    /// Contact area summed over the steps [m²].
+    pub contact_area: f32,
+    /// Deepest penetration into a body during the frame [m].
+    pub max_penetration: f32,
+}

@@ -1,0 +1,79 @@
+//! Zheng's slope test (§3.7.1): a cloth falling onto a 30° slope presses on it with
+//! ρ g cos 30° = 1.2217 Pa; with μ = 0.2 it slides with acceleration g (sin 30° − μ cos 30°)
+//! under a friction stress μ ρ g cos 30° = 0.2443 Pa; with μ = tan 30° + 0.01 it sticks, the
+//! friction carrying ρ g sin 30° = 0.7053 Pa.
+
+use std::path::Path;
+
+use glam::Vec3;
+use selvedge::Simulation;
+use selvedge::components::Particles;
+use selvedge::scene::load_scene;
+
+const RHO: f64 = 0.14395;
+const G: f64 = 9.8;
+
+fn simulation(name: &str) -> Simulation {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
+    let file = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    Simulation::from_file(&file).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Mean position and velocity of the cloth.
+fn centre(sim: &mut Simulation) -> (Vec3, Vec3) {
+    let p = sim.world_mut().query::<&Particles>().single(sim.world()).expect("one cloth").clone();
+    let n = p.len() as f32;
+    (p.position.iter().sum::<Vec3>() / n, p.velocity.iter().sum::<Vec3>() / n)
+}
+
+fn probe(sim: &Simulation, name: &str) -> f64 {
+    sim.probes().get(name).unwrap_or_else(|| panic!("no probe {name}"))
+}
+
+/// Steps to time `t` [s], checking pressure (and friction stress) on every frame after
+/// the cloth has landed.
+fn run_until(sim: &mut Simulation, t: f64, friction_stress: f64) {
+    let pressure = RHO * G * 30f64.to_radians().cos();
+    while sim.clock().time_s < t - 1e-9 {
+        sim.step_frame().unwrap_or_else(|e| panic!("{e}"));
+        if sim.clock().time_s > 0.3 {
+            let measured = probe(sim, "contact_pressure_pa");
+            assert!(
+                (measured - pressure).abs() < 0.01 * pressure,
+                "pressure {measured} Pa at {} s",
+                sim.clock().time_s
+            );
+            let measured = probe(sim, "friction_stress_pa");
+            assert!((measured - friction_stress).abs() < 0.02 * friction_stress, "friction {measured} Pa");
+            assert!(probe(sim, "max_penetration_m") <= 0.001, "the cloth stays out of the slope");
+        }
+    }
+}
+
+#[test]
+fn with_mu_0_2_the_cloth_slides_at_the_coulomb_acceleration() {
+    let mut sim = simulation("zheng_slope.ron");
+    let cos30 = 30f64.to_radians().cos();
+    let friction_stress = 0.2 * RHO * G * cos30;
+    assert!((friction_stress - 0.2443).abs() < 1e-4);
+    run_until(&mut sim, 0.5, friction_stress);
+    let (t0, (_, v0)) = (sim.clock().time_s, centre(&mut sim));
+    run_until(&mut sim, 1.4, friction_stress);
+    let (t1, (_, v1)) = (sim.clock().time_s, centre(&mut sim));
+    let downhill = Vec3::new(30f32.to_radians().cos(), -30f32.to_radians().sin(), 0.0);
+    let acceleration = f64::from((v1 - v0).dot(downhill)) / (t1 - t0);
+    let expected = G * (0.5 - 0.2 * cos30);
+    assert!((acceleration - expected).abs() < 0.02 * expected, "acceleration {acceleration} m/s², expected {expected}");
+}
+
+#[test]
+fn with_mu_above_tan_30_the_cloth_sticks() {
+    let mut sim = simulation("zheng_slope_stick.ron");
+    let hold = RHO * G * 0.5;
+    assert!((hold - 0.7053).abs() < 1e-4);
+    run_until(&mut sim, 0.5, hold);
+    let (start, _) = centre(&mut sim);
+    run_until(&mut sim, 1.5, hold);
+    let (end, _) = centre(&mut sim);
+    assert!((end - start).length() < 1e-3, "slid {} m in a second", (end - start).length());
+}
