@@ -187,6 +187,10 @@ mod tests {
         assert!((mid.linear - Vec3::X).length() < 1e-6);
         assert!((mid.angular - Vec3::new(0.0, std::f32::consts::FRAC_PI_4, 0.0)).length() < 1e-5);
         assert_eq!(motion.state_at(0.0).linear, Vec3::ZERO);
+        let sliding = ColliderMotion::Keyframes(vec![(0.0, a), (1.0, Pose { translation: Vec3::X, ..a })]);
+        let state = sliding.state_at(0.5);
+        assert_eq!(state.angular, Vec3::ZERO, "no rotation, no angular velocity");
+        assert!(state.velocity_at(Vec3::new(3.0, 2.0, 1.0)).abs_diff_eq(Vec3::X, 1e-6));
         assert!((motion.state_at(5.0).pose.translation - 2.0 * Vec3::X).length() < 1e-6);
     }
 }
