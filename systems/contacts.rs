@@ -3,7 +3,7 @@
 use bevy_ecs::prelude::*;
 
 use crate::collision::body_contact::{ContactBody, resolve_body_contacts};
-use crate::components::{Cloth, ClothMaterial, ClothTopology, Collider, ContactStats, Particles};
+use crate::components::{Cloth, ClothMaterial, ClothTopology, Collider, ContactStats, Particles, SolverWorkspace};
 use crate::resources::{SimClock, StepSettings};
 use crate::schedule::{FrameSystems, SimSchedules, SubstepSystems};
 
@@ -14,13 +14,13 @@ pub fn collide_with_bodies(
     clock: Res<SimClock>,
     settings: Res<StepSettings>,
     colliders: Query<&Collider>,
-    mut cloths: Query<(&Cloth, &ClothMaterial, &mut Particles, &ClothTopology, &mut ContactStats)>,
+    mut cloths: Query<(&Cloth, &ClothMaterial, &mut Particles, &ClothTopology, &SolverWorkspace, &mut ContactStats)>,
 ) {
     if colliders.is_empty() {
         return;
     }
     let t = (clock.time_s + f64::from(settings.dt)) as f32;
-    for (cloth, material, mut particles, topology, mut stats) in &mut cloths {
+    for (cloth, material, mut particles, topology, workspace, mut stats) in &mut cloths {
         let bodies: Vec<ContactBody<'_>> = colliders
             .iter()
             .map(|c| ContactBody {
@@ -33,8 +33,16 @@ pub fn collide_with_bodies(
         let Particles { position, velocity, inv_mass, .. } = &mut *particles;
         let density = material.density;
         let area = |i: usize| 1.0 / (inv_mass[i] * density);
-        let totals =
-            resolve_body_contacts(&bodies, inv_mass, &topology.free_inv_mass, area, settings.dt, position, velocity);
+        let totals = resolve_body_contacts(
+            &bodies,
+            inv_mass,
+            &topology.free_inv_mass,
+            area,
+            settings.dt,
+            &workspace.step_start,
+            position,
+            velocity,
+        );
         stats.impulse += totals.impulse;
         stats.normal_impulse += totals.normal_impulse;
         stats.friction_impulse += totals.friction_impulse;

@@ -66,12 +66,13 @@ impl ForceEnvironment<'_> {
 }
 
 /// Writes the total force on every particle at the current state into
-/// [`Particles::force`]. Runs in [`SubstepSystems::Forces`].
+/// [`Particles::force`], and keeps the positions the step starts from. Runs in [`SubstepSystems::Forces`].
 pub fn accumulate_forces(
     environment: ForceEnvironment,
     mut cloths: Query<(&mut Particles, ForceElements, &mut SolverWorkspace)>,
 ) {
     for (mut particles, elements, mut workspace) in &mut cloths {
+        workspace.step_start.clone_from(&particles.position);
         let mut force = std::mem::take(&mut particles.force);
         let model = environment.model(&particles.inv_mass, elements);
         model.eval(&particles.position, &particles.velocity, environment.time(), &mut workspace.forces, &mut force);

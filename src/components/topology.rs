@@ -147,6 +147,8 @@ pub struct SolverWorkspace {
     pub force: Vec<Vec3>,
     /// Positions at the start of the strain limiter's projection [m].
     pub positions: Vec<Vec3>,
+    /// Positions at the start of the current step [m], for continuous contact.
+    pub step_start: Vec<Vec3>,
 }
 
 /// What an embedding renderer needs each frame: vertex normals beside the particle
