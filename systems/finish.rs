@@ -4,6 +4,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 
 use super::forces::{ForceElements, ForceEnvironment};
+use crate::collision::intersection::count_self_intersections;
 use crate::components::{
     Cloth, Collider, ContactStats, MembraneTriangles, Particles, Pins, SolverWorkspace, Springs, Triangles,
 };
@@ -41,7 +42,9 @@ pub fn check_cloth_health(
 /// Measures the frame's probes over all cloths: `kinetic_energy_j`, `potential_energy_j`
 /// (gravity about y = 0 plus elastic energy), `max_strain` (largest edge strain, springs
 /// and membrane triangle sides) and `pin_force_n` (magnitude of
-/// the total force the pins carry, from the forces at the frame's final state).
+/// the total force the pins carry, from the forces at the frame's final state) and
+/// `self_intersections` (pairs of non-adjacent triangles of a cloth that intersect, by an
+/// exact test independent of the contact code).
 /// Runs in [`FrameSystems::Finish`].
 pub fn measure_probes(
     environment: ForceEnvironment,
@@ -49,8 +52,10 @@ pub fn measure_probes(
     mut cloths: Query<(&Particles, ForceElements, &Pins, &mut SolverWorkspace)>,
 ) {
     let (mut kinetic, mut potential, mut strain, mut pin_force) = (0.0, 0.0, f32::NEG_INFINITY, Vec3::ZERO);
+    let mut intersections = 0;
     for (particles, elements, pins, mut workspace) in &mut cloths {
         let model = environment.model(&particles.inv_mass, elements);
+        intersections += count_self_intersections(&particles.position, model.triangles);
         kinetic += kinetic_energy(&particles.velocity, &particles.inv_mass);
         potential += model.potential_energy(&particles.position);
         strain = strain.max(max_strain(&particles.position, &particles.rest_position, model.springs, model.membranes));
@@ -65,6 +70,7 @@ pub fn measure_probes(
     probes.set("potential_energy_j", potential);
     probes.set("max_strain", f64::from(strain.max(f32::MIN)));
     probes.set("pin_force_n", f64::from(pin_force.length()));
+    probes.set("self_intersections", intersections as f64);
 }
 
 /// Measures the cloth probes the scene asked for (cantilever angle, drape coefficient,

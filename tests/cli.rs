@@ -41,7 +41,7 @@ fn run_writes_frames_summary_and_probes() {
     for field in ["wall_time_s", "ms_per_frame", "springs", "triangles"] {
         assert!(summary[field].is_number(), "summary lacks {field}");
     }
-    for probe in ["kinetic_energy_j", "potential_energy_j", "max_strain", "pin_force_n"] {
+    for probe in ["kinetic_energy_j", "potential_energy_j", "max_strain", "pin_force_n", "self_intersections"] {
         assert!(summary["probes"][probe].is_number(), "summary lacks probe {probe}");
     }
     // Kinetic energy after 0.05 s of free fall: ½ M (g t)².
@@ -50,7 +50,7 @@ fn run_writes_frames_summary_and_probes() {
     assert!((kinetic - expected).abs() < 1e-3 * expected, "kinetic energy {kinetic}, expected {expected}");
     let csv = std::fs::read_to_string(dir.path().join("probes.csv")).expect("probes.csv");
     let lines: Vec<&str> = csv.lines().collect();
-    assert_eq!(lines[0], "frame,time_s,kinetic_energy_j,max_strain,pin_force_n,potential_energy_j");
+    assert_eq!(lines[0], "frame,time_s,kinetic_energy_j,max_strain,pin_force_n,potential_energy_j,self_intersections");
     assert_eq!(lines.len(), 4);
     assert!(lines[3].starts_with("3,0.05"));
     // Not a terminal: progress comes as plain lines, then the summary.

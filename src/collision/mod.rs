@@ -3,3 +3,4 @@
 
 pub mod body_contact;
 pub mod collider;
+pub mod intersection;
