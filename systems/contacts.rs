@@ -3,7 +3,9 @@
 use bevy_ecs::prelude::*;
 
 use crate::collision::body_contact::{ContactBody, resolve_body_contacts};
-use crate::components::{Cloth, ClothMaterial, ClothTopology, Collider, ContactStats, Particles, SolverWorkspace};
+use crate::components::{
+    Cloth, ClothMaterial, ClothTopology, Collider, ContactStats, Particles, SolverWorkspace, Touching,
+};
 use crate::resources::{SimClock, StepSettings};
 use crate::schedule::{FrameSystems, SimSchedules, SubstepSystems};
 
@@ -14,13 +16,21 @@ pub fn collide_with_bodies(
     clock: Res<SimClock>,
     settings: Res<StepSettings>,
     colliders: Query<&Collider>,
-    mut cloths: Query<(&Cloth, &ClothMaterial, &mut Particles, &ClothTopology, &SolverWorkspace, &mut ContactStats)>,
+    mut cloths: Query<(
+        &Cloth,
+        &ClothMaterial,
+        &mut Particles,
+        &ClothTopology,
+        &SolverWorkspace,
+        &mut ContactStats,
+        &mut Touching,
+    )>,
 ) {
     if colliders.is_empty() {
         return;
     }
     let t = (clock.time_s + f64::from(settings.dt)) as f32;
-    for (cloth, material, mut particles, topology, workspace, mut stats) in &mut cloths {
+    for (cloth, material, mut particles, topology, workspace, mut stats, mut touching) in &mut cloths {
         let bodies: Vec<ContactBody<'_>> = colliders
             .iter()
             .map(|c| ContactBody {
@@ -28,6 +38,7 @@ pub fn collide_with_bodies(
                 state: c.motion.state_at(t),
                 friction: c.friction,
                 thickness: c.thickness + cloth.thickness,
+                stick: c.stick,
             })
             .collect();
         let Particles { position, velocity, inv_mass, .. } = &mut *particles;
@@ -40,8 +51,10 @@ pub fn collide_with_bodies(
             area,
             settings.dt,
             &workspace.step_start,
+            &workspace.support,
             position,
             velocity,
+            &mut touching.0,
         );
         stats.impulse += totals.impulse;
         stats.normal_impulse += totals.normal_impulse;

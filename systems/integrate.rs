@@ -1,13 +1,15 @@
 //! Advancing every cloth by one step with the scene's integrator.
 
 use bevy_ecs::prelude::*;
+use glam::Vec3;
 
 use super::forces::{ForceElements, ForceEnvironment};
-use crate::components::{Cloth, Particles, SolverWorkspace};
+use crate::components::{Cloth, Particles, SolverWorkspace, Touching};
 use crate::resources::{HealthProblem, HealthReport, IntegratorStats, SolverSettings, StepSettings};
 use crate::schedule::{SimSchedules, SubstepSystems};
 use crate::solver::cfl::cfl_step;
 use crate::solver::forces::ClothDynamics;
+use crate::solver::implicit::VelocityConstraint;
 use crate::solver::integrate::{Dynamics, StepReport, step};
 
 /// Integrates each cloth from the forces of [`SubstepSystems::Forces`], re-evaluating the
@@ -20,10 +22,22 @@ pub fn integrate_cloths(
     environment: ForceEnvironment,
     mut stats: ResMut<IntegratorStats>,
     mut health: ResMut<HealthReport>,
-    mut cloths: Query<(&Cloth, &mut Particles, ForceElements, &mut SolverWorkspace)>,
+    mut cloths: Query<(&Cloth, &mut Particles, ForceElements, &Touching, &mut SolverWorkspace)>,
 ) {
-    for (cloth, mut particles, elements, mut workspace) in &mut cloths {
-        let SolverWorkspace { integrator, forces, .. } = &mut *workspace;
+    for (cloth, mut particles, elements, touching, mut workspace) in &mut cloths {
+        let SolverWorkspace { integrator, forces, support, .. } = &mut *workspace;
+        // Particles the last step left on a body stay on it while the forces press them
+        // into it; those pulled away are let go.
+        let constraints: Vec<VelocityConstraint> = touching
+            .0
+            .iter()
+            .filter(|t| particles.force[t.particle as usize].dot(t.normal) < 0.0)
+            .map(|t| VelocityConstraint {
+                particle: t.particle,
+                normal: t.normal,
+                normal_velocity: t.surface_velocity.dot(t.normal),
+            })
+            .collect();
         integrator.resize(particles.len());
         for ((a, f), w) in integrator.start_acceleration.iter_mut().zip(&particles.force).zip(&elements.5.free_inv_mass)
         {
@@ -48,24 +62,31 @@ pub fn integrate_cloths(
             if split > 0 {
                 dynamics.acceleration(&x, &v, t, &mut integrator.start_acceleration);
             }
-            result = step(solver.integrator, &mut dynamics, &mut x, &mut v, t, h, &solver.method, integrator).map(
-                |report| {
-                    let total = result.unwrap_or_default();
-                    StepReport {
-                        accepted: total.accepted + report.accepted,
-                        rejected: total.rejected + report.rejected,
-                        evaluations: total.evaluations + report.evaluations + u32::from(split > 0),
-                        iterations: total.iterations + report.iterations,
-                        max_error_ratio: total.max_error_ratio.max(report.max_error_ratio),
-                    }
-                },
-            );
+            result =
+                step(solver.integrator, &mut dynamics, &constraints, &mut x, &mut v, t, h, &solver.method, integrator)
+                    .map(|report| {
+                        let total = result.unwrap_or_default();
+                        StepReport {
+                            accepted: total.accepted + report.accepted,
+                            rejected: total.rejected + report.rejected,
+                            evaluations: total.evaluations + report.evaluations + u32::from(split > 0),
+                            iterations: total.iterations + report.iterations,
+                            max_error_ratio: total.max_error_ratio.max(report.max_error_ratio),
+                        }
+                    });
             if result.is_err() {
                 break;
             }
         }
         particles.position = x;
         particles.velocity = v;
+        support.clear();
+        support.resize(particles.len(), Vec3::ZERO);
+        if solver.integrator.is_implicit() {
+            for (c, impulse) in constraints.iter().zip(&integrator.implicit.constraint_impulses) {
+                support[c.particle as usize] += *impulse;
+            }
+        }
         match result {
             Ok(report) => {
                 stats.accepted += u64::from(report.accepted);

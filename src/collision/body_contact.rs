@@ -25,10 +25,10 @@ pub struct ContactBody<'a> {
     /// Distance kept between the cloth's mid-surface and the body [m]: the body's and the
     /// cloth's contact thicknesses together.
     pub thickness: f32,
+    /// Bricis's restrain-on-contact (B5): a particle that touches the body moves with it
+    /// from then on, neither sliding nor lifting off.
+    pub stick: bool,
 }
-
-/// How far inside a body a particle caught by its path is placed before the response [m].
-const ENTRY_DEPTH: f32 = 1e-6;
 
 /// What the contacts of one step did to one cloth.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -53,10 +53,26 @@ struct ParticleContact {
     friction: f32,
     area: f32,
     penetration: f32,
+    touch: Option<Touch>,
+}
+
+/// A particle touching a body at the end of a step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Touch {
+    /// The particle.
+    pub particle: u32,
+    /// The body's outward normal there.
+    pub normal: Vec3,
+    /// The body's surface velocity there [m/s].
+    pub surface_velocity: Vec3,
 }
 
 /// Resolves the contacts of particles `x`, `v` (masses `1/inv_mass`, areas `area`) with
-/// `bodies` at the end of a step of `h` [s] that started at positions `start`.
+/// `bodies` at the end of a step of `h` [s] that started at positions `start`. The
+/// particles left touching a body are listed in `touching`, in particle order, for the
+/// next implicit step to keep them there; `support` is the impulse such a step's
+/// constraints gave each particle [N·s] (zero for explicit steps), which counts as contact
+/// force.
 ///
 /// A particle that moved further than the contact thickness in the step is first traced
 /// along its path (a ray from `start`): if the path enters a body, the particle is put
@@ -70,8 +86,10 @@ pub fn resolve_body_contacts(
     area: impl Fn(usize) -> f32 + Sync,
     h: f32,
     start: &[Vec3],
+    support: &[Vec3],
     x: &mut [Vec3],
     v: &mut [Vec3],
+    touching: &mut Vec<Touch>,
 ) -> ContactTotals {
     let outcomes: Vec<ParticleContact> = x
         .par_iter_mut()
@@ -85,54 +103,83 @@ pub fn resolve_body_contacts(
             }
             let before = *v;
             for body in bodies {
+                // Where the particle is against the body: the point its path entered the
+                // body if it crossed the surface this step, else its nearest surface point.
                 let path = *x - start[i];
-                if path.length() > body.thickness {
-                    let ray = Ray::new(start[i], path);
-                    let from_outside = !body.shape.contains_point(&body.state.pose, start[i]);
-                    if let Some(hit) = body.shape.cast_ray_and_get_normal(&body.state.pose, &ray, 1.0, true)
-                        && from_outside
-                    {
-                        // Just inside the surface where the path entered: the proximity
-                        // response below pushes it out along the surface normal.
-                        *x = ray.point_at(hit.time_of_impact) - ENTRY_DEPTH * hit.normal;
+                let entry = (path.length() > body.thickness && !body.shape.contains_point(&body.state.pose, start[i]))
+                    .then(|| {
+                        let ray = Ray::new(start[i], path);
+                        body.shape
+                            .cast_ray_and_get_normal(&body.state.pose, &ray, 1.0, true)
+                            .map(|hit| (ray.point_at(hit.time_of_impact), hit.normal))
+                    })
+                    .flatten();
+                let (signed, outward) = match entry {
+                    Some((point, normal)) => {
+                        *x = point;
+                        (0.0, normal)
                     }
-                }
-                let projection = body.shape.project_point(&body.state.pose, *x, false);
-                let offset = *x - projection.point;
-                let distance = offset.length();
-                let signed = if projection.is_inside { -distance } else { distance };
-                if signed >= body.thickness {
-                    continue;
-                }
-                let Some(outward) = offset.try_normalize().map(|n| if projection.is_inside { -n } else { n }) else {
-                    continue;
+                    None => {
+                        let projection = body.shape.project_point(&body.state.pose, *x, false);
+                        let offset = *x - projection.point;
+                        let distance = offset.length();
+                        let signed = if projection.is_inside { -distance } else { distance };
+                        if signed >= body.thickness {
+                            continue;
+                        }
+                        // A particle exactly on the surface has no direction to leave by.
+                        let Some(outward) = offset.try_normalize().map(|n| if projection.is_inside { -n } else { n })
+                        else {
+                            continue;
+                        };
+                        (signed, outward)
+                    }
                 };
                 outcome.penetration = outcome.penetration.max(-signed);
                 outcome.area = area(i);
                 *x += (body.thickness - signed) * outward;
                 let surface = body.state.velocity_at(*x);
+                outcome.touch = Some(Touch { particle: i as u32, normal: outward, surface_velocity: surface });
                 let relative = *v - surface;
                 let approach = relative.dot(outward);
-                if approach >= 0.0 {
+                let mass = 1.0 / inv_mass[i];
+                if body.stick {
+                    // Take back the whole step's motion relative to the body.
+                    *x -= h * (relative - relative.dot(outward) * outward);
+                    *v = surface;
+                    outcome.normal += mass * approach.abs();
+                    outcome.friction += mass * (relative - approach * outward).length();
                     continue;
                 }
+                // What an implicit solve's constraint pushed along the normal counts as
+                // contact force (signed: its pulls cancel its pushes across the cloth).
+                outcome.normal += support[i].dot(outward);
+                // The normal velocity this response removes bounds friction. (Friction from
+                // the constraint's own impulse is left out: per particle it mixes the
+                // body's push with stiff internal forces and made resting cloth sticky.)
+                let removed = (-approach).max(0.0);
+                if removed == 0.0 {
+                    continue;
+                }
+                let normal_part = approach.min(0.0);
                 let tangential = relative - approach * outward;
                 let speed = tangential.length();
-                let slip = if speed <= -body.friction * approach {
+                let slip = if speed <= body.friction * removed {
                     Vec3::ZERO
                 } else {
-                    tangential * (1.0 - body.friction * -approach / speed)
+                    tangential * (1.0 - body.friction * removed / speed)
                 };
-                *v = surface + slip;
+                *v = surface + slip + (approach - normal_part) * outward;
                 *x += h * (slip - tangential);
-                let mass = 1.0 / inv_mass[i];
-                outcome.normal += mass * -approach;
+                outcome.normal += mass * removed;
                 outcome.friction += mass * (tangential - slip).length();
             }
-            outcome.impulse = (*v - before) / inv_mass[i];
+            outcome.impulse = (*v - before) / inv_mass[i] + support[i];
             outcome
         })
         .collect();
+    touching.clear();
+    touching.extend(outcomes.iter().filter_map(|o| o.touch));
     outcomes.iter().fold(ContactTotals::default(), |mut totals, o| {
         totals.impulse += o.impulse;
         totals.normal_impulse += o.normal;
@@ -157,11 +204,21 @@ mod tests {
     #[test]
     fn a_particle_below_the_ground_is_put_back_and_slowed_by_friction() {
         let (shape, state) = ground();
-        let body = ContactBody { shape: &shape, state, friction: 0.5, thickness: 0.0 };
+        let body = ContactBody { shape: &shape, state, friction: 0.5, thickness: 0.0, stick: false };
         let mut x = [Vec3::new(0.0, -0.01, 0.0), Vec3::new(0.0, 1.0, 0.0)];
         let mut v = [Vec3::new(2.0, -1.0, 0.0), Vec3::new(0.0, -1.0, 0.0)];
-        let totals =
-            resolve_body_contacts(&[body], &[2.0, 2.0], &[2.0, 2.0], |_| 0.25, 0.0, &x.clone(), &mut x, &mut v);
+        let totals = resolve_body_contacts(
+            &[body],
+            &[2.0, 2.0],
+            &[2.0, 2.0],
+            |_| 0.25,
+            0.0,
+            &x.clone(),
+            &[Vec3::ZERO; 4][..x.len()],
+            &mut x,
+            &mut v,
+            &mut Vec::new(),
+        );
         assert!(x[0].y.abs() < 1e-7);
         assert!((v[0] - Vec3::new(1.5, 0.0, 0.0)).length() < 1e-6);
         assert_eq!(v[1], Vec3::new(0.0, -1.0, 0.0), "particles above the plane are untouched");
@@ -175,10 +232,21 @@ mod tests {
     fn enough_friction_makes_a_particle_stick_and_a_moving_surface_carries_it() {
         let (shape, mut state) = ground();
         state.linear = Vec3::new(0.3, 0.0, 0.0);
-        let body = ContactBody { shape: &shape, state, friction: 2.0, thickness: 0.001 };
+        let body = ContactBody { shape: &shape, state, friction: 2.0, thickness: 0.001, stick: false };
         let mut x = [Vec3::new(0.0, 0.0005, 0.0)];
         let mut v = [Vec3::new(0.5, -0.2, 0.0)];
-        resolve_body_contacts(&[body], &[1.0], &[1.0], |_| 1.0, 0.0, &x.clone(), &mut x, &mut v);
+        resolve_body_contacts(
+            &[body],
+            &[1.0],
+            &[1.0],
+            |_| 1.0,
+            0.0,
+            &x.clone(),
+            &[Vec3::ZERO; 4][..x.len()],
+            &mut x,
+            &mut v,
+            &mut Vec::new(),
+        );
         assert!((x[0].y - 0.001).abs() < 1e-7, "kept at the contact thickness");
         assert!((v[0] - Vec3::new(0.3, 0.0, 0.0)).length() < 1e-6, "moves with the surface");
     }
@@ -188,12 +256,47 @@ mod tests {
         // A 2 mm plate; the particle jumps from 5 cm above to 5 cm below in one step.
         let plate = Cuboid::new(Vec3::new(1.0, 0.001, 1.0));
         let state = ColliderState { pose: Pose3::IDENTITY, linear: Vec3::ZERO, angular: Vec3::ZERO };
-        let body = ContactBody { shape: &plate, state, friction: 0.0, thickness: 0.0005 };
+        let body = ContactBody { shape: &plate, state, friction: 0.0, thickness: 0.0005, stick: false };
         let start = [Vec3::new(0.1, 0.05, 0.0)];
         let mut x = [Vec3::new(0.1, -0.05, 0.0)];
         let mut v = [Vec3::new(0.0, -10.0, 0.0)];
-        resolve_body_contacts(&[body], &[1.0], &[1.0], |_| 1.0, 0.01, &start, &mut x, &mut v);
+        resolve_body_contacts(
+            &[body],
+            &[1.0],
+            &[1.0],
+            |_| 1.0,
+            0.01,
+            &start,
+            &[Vec3::ZERO; 4][..x.len()],
+            &mut x,
+            &mut v,
+            &mut Vec::new(),
+        );
         assert!((x[0].y - 0.0015).abs() < 1e-5, "stopped on the upper face: {}", x[0].y);
         assert!(v[0].y.abs() < 1e-6, "its approach velocity removed");
+    }
+
+    #[test]
+    fn in_stick_mode_a_touching_particle_moves_with_the_body_even_when_pulled_away() {
+        let (shape, mut state) = ground();
+        state.linear = Vec3::new(0.2, 0.0, 0.0);
+        let body = ContactBody { shape: &shape, state, friction: 0.0, thickness: 0.001, stick: true };
+        let start = [Vec3::new(0.0, 0.0008, 0.0)];
+        let mut x = [Vec3::new(0.01, 0.0009, 0.0)];
+        let mut v = [Vec3::new(1.0, 0.1, 0.0)];
+        resolve_body_contacts(
+            &[body],
+            &[1.0],
+            &[1.0],
+            |_| 1.0,
+            0.01,
+            &start,
+            &[Vec3::ZERO; 4][..x.len()],
+            &mut x,
+            &mut v,
+            &mut Vec::new(),
+        );
+        assert_eq!(v[0], Vec3::new(0.2, 0.0, 0.0));
+        assert!((x[0] - Vec3::new(0.002, 0.001, 0.0)).length() < 1e-6, "moved with the body: {}", x[0]);
     }
 }

@@ -4,6 +4,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 use parry3d::shape::SharedShape;
 
+use crate::collision::body_contact::Touch;
 use crate::collision::collider::ColliderMotion;
 
 /// A static or kinematic solid body (E5, D11, B5): a parry3d shape that moves along its
@@ -20,6 +21,8 @@ pub struct Collider {
     pub friction: f32,
     /// Extra distance cloth keeps from its surface [m].
     pub thickness: f32,
+    /// Restrain-on-contact: cloth that touches it stays (Bricis B5).
+    pub stick: bool,
 }
 
 impl std::fmt::Debug for Collider {
@@ -29,9 +32,15 @@ impl std::fmt::Debug for Collider {
             .field("motion", &self.motion)
             .field("friction", &self.friction)
             .field("thickness", &self.thickness)
+            .field("stick", &self.stick)
             .finish_non_exhaustive()
     }
 }
+
+/// The particles of a cloth left touching a body by the last step: the implicit
+/// solvers keep them on the surface during the next one.
+#[derive(Component, Debug, Clone, Default, PartialEq)]
+pub struct Touching(pub Vec<Touch>);
 
 /// Contact of one cloth with the bodies, summed over the steps of the current frame.
 #[derive(Component, Debug, Clone, Copy, Default, PartialEq)]

@@ -149,6 +149,8 @@ pub struct SolverWorkspace {
     pub positions: Vec<Vec3>,
     /// Positions at the start of the current step [m], for continuous contact.
     pub step_start: Vec<Vec3>,
+    /// Impulse the implicit solve's contact constraints gave each particle this step [N·s].
+    pub support: Vec<Vec3>,
 }
 
 /// What an embedding renderer needs each frame: vertex normals beside the particle

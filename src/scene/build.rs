@@ -5,7 +5,7 @@ use std::path::Path;
 use bevy_ecs::prelude::*;
 use glam::Vec3;
 
-use super::format::{ClothDesc, EditActionDesc, LimitedEdgesDesc, RayleighDesc, Scene, ShapeDesc};
+use super::format::{ClothDesc, ContactResponse, EditActionDesc, LimitedEdgesDesc, RayleighDesc, Scene, ShapeDesc};
 use super::load::SceneError;
 use super::validate::{TimePlan, time_plan};
 use crate::builders::ClothData;
@@ -17,7 +17,7 @@ use crate::builders::surface::limited_edges;
 use crate::builders::tear::Cut;
 use crate::collision::collider::{ColliderMotion, ColliderShape, Pose};
 use crate::components::{
-    Cloth, ClothTopology, Collider, ContactStats, Pins, RenderMesh, SolverWorkspace, StrainLimit, UserForces,
+    Cloth, ClothTopology, Collider, ContactStats, Pins, RenderMesh, SolverWorkspace, StrainLimit, Touching, UserForces,
 };
 use crate::resources::{
     AirSettings, DivergenceLimit, EditAction, Gravity, HealthReport, IntegratorStats, ProbeRequests, Probes,
@@ -99,6 +99,7 @@ fn spawn_colliders(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
             }),
             friction: scene.ground.friction,
             thickness: 0.0,
+            stick: false,
         });
     }
     for (k, desc) in scene.colliders.iter().enumerate() {
@@ -121,6 +122,7 @@ fn spawn_colliders(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
             motion,
             friction: desc.friction,
             thickness: desc.thickness,
+            stick: desc.response == ContactResponse::Stick,
         });
     }
     Ok(())
@@ -188,6 +190,7 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
                 data.membranes,
                 strain_limit,
                 ContactStats::default(),
+                Touching::default(),
                 ClothTopology::default(),
                 SolverWorkspace::default(),
                 RenderMesh::default(),

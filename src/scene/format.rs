@@ -326,6 +326,19 @@ pub struct ColliderDesc {
     /// Extra distance cloth keeps from its surface [m].
     #[serde(default)]
     pub thickness: f32,
+    /// How cloth responds to touching it.
+    #[serde(default)]
+    pub response: ContactResponse,
+}
+
+/// How cloth responds to touching a collider.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum ContactResponse {
+    /// It slides with Coulomb friction and may lift off (Zheng).
+    #[default]
+    Slide,
+    /// It stays where it touched, moving with the body (Bricis's restrain-on-contact, B5).
+    Stick,
 }
 
 fn default_friction() -> f32 {

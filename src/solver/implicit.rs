@@ -22,6 +22,7 @@ use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
 use super::PARALLEL_MIN_LEN;
+use super::elements::spring::outer;
 use super::elements::{BlockMatrix, BlockPattern};
 use super::integrate::{Dynamics, StepReport};
 
@@ -99,16 +100,39 @@ pub struct ImplicitWorkspace {
     x: Vec<Vec3>,
     v: Vec<Vec3>,
     preconditioner: Vec<Mat3>,
-    free: Vec<bool>,
+    /// Per particle, the directions its Δv may take: identity (free), zero (pinned) or a
+    /// projection off a contact normal.
+    filter: Vec<Mat3>,
+    /// Per particle, the part of Δv the constraints prescribe.
+    prescribed: Vec<Vec3>,
+    /// Impulse each contact constraint applied in the last step [N·s], parallel to the
+    /// constraints passed to [`implicit_step`].
+    pub constraint_impulses: Vec<Vec3>,
+}
+
+/// A particle touching a body: in the implicit solve its velocity along `normal` is set to
+/// `normal_velocity` [m/s] (the body's), the rest left to the solve — Baraff & Witkin's
+/// constraint by filtering, so that the solver, not a projection after it, keeps cloth
+/// resting on a body.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VelocityConstraint {
+    /// The particle.
+    pub particle: u32,
+    /// Unit normal of the body at the contact, pointing out of the body.
+    pub normal: Vec3,
+    /// Velocity along the normal the particle must have at the end of the step [m/s].
+    pub normal_velocity: f32,
 }
 
 /// Relative size of a Newton correction below which the step counts as converged.
 const NEWTON_TOLERANCE: f64 = 1e-5;
 
-/// Advances `(x, v)` by one implicit θ-step of length `h`.
+/// Advances `(x, v)` by one implicit θ-step of length `h`, with pinned particles held and
+/// `constraints` keeping contacts.
 pub fn implicit_step(
     settings: &ImplicitSettings,
     dynamics: &mut impl LinearDynamics,
+    constraints: &[VelocityConstraint],
     x: &mut [Vec3],
     v: &mut [Vec3],
     t: f32,
@@ -131,8 +155,19 @@ pub fn implicit_step(
     ] {
         buffer.resize(n, Vec3::ZERO);
     }
-    ws.free.clear();
-    ws.free.extend((0..n).map(|i| dynamics.is_free(i)));
+    ws.filter.clear();
+    ws.filter.extend((0..n).map(|i| if dynamics.is_free(i) { Mat3::IDENTITY } else { Mat3::ZERO }));
+    ws.prescribed.clear();
+    ws.prescribed.resize(n, Vec3::ZERO);
+    for c in constraints {
+        let i = c.particle as usize;
+        let projection = Mat3::IDENTITY - outer(c.normal, c.normal);
+        ws.filter[i] = projection * ws.filter[i];
+        if dynamics.is_free(i) {
+            let current = v[i] + ws.prescribed[i];
+            ws.prescribed[i] += (c.normal_velocity - current.dot(c.normal)) * c.normal;
+        }
+    }
     let (theta, Rayleigh { alpha, beta }) = (settings.theta, settings.rayleigh);
     let mut report = StepReport { accepted: 1, ..StepReport::default() };
 
@@ -145,8 +180,11 @@ pub fn implicit_step(
         ws.rhs[i] = h * ws.start_force[i] + h * h * theta * ws.product[i];
     }
     build_system(settings, h, dynamics, ws);
-    report.iterations += conjugate_gradient(dynamics.pattern(), settings, ws);
+    report.iterations += conjugate_gradient(dynamics.pattern(), settings, true, ws);
     ws.dv.copy_from_slice(&ws.delta);
+    ws.constraint_impulses.clear();
+    ws.constraint_impulses.resize(constraints.len(), Vec3::ZERO);
+    add_constraint_impulses(dynamics.pattern(), constraints, ws);
 
     for _ in 1..settings.newton_iterations {
         for i in 0..n {
@@ -169,7 +207,8 @@ pub fn implicit_step(
                 h * ((1.0 - theta) * (ws.start_force[i] + damping_change) + theta * end_force) - mass * ws.dv[i];
         }
         build_system(settings, h, dynamics, ws);
-        report.iterations += conjugate_gradient(dynamics.pattern(), settings, ws);
+        report.iterations += conjugate_gradient(dynamics.pattern(), settings, false, ws);
+        add_constraint_impulses(dynamics.pattern(), constraints, ws);
         for i in 0..n {
             ws.dv[i] += ws.delta[i];
         }
@@ -199,27 +238,33 @@ fn build_system(settings: &ImplicitSettings, h: f32, dynamics: &impl LinearDynam
     ws.system.blocks.extend(ws.dfdv.blocks.iter().zip(&ws.dfdx.blocks).map(|(d, k)| -h * *d - k_weight * *k));
     ws.system.add_diagonal(pattern, |i| (1.0 + h * alpha) * dynamics.mass(i));
     ws.preconditioner.clear();
-    ws.preconditioner.extend((0..ws.free.len()).map(|i| {
+    ws.preconditioner.extend((0..ws.filter.len()).map(|i| {
         let block = ws.system.block(pattern, i as u32, i as u32);
         if block.determinant().abs() > 0.0 { block.inverse() } else { Mat3::IDENTITY }
     }));
-    for (rhs, &free) in ws.rhs.iter_mut().zip(&ws.free) {
-        if !free {
-            *rhs = Vec3::ZERO;
-        }
-    }
 }
 
 fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
     a.iter().zip(b).map(|(a, b)| f64::from(a.dot(*b))).sum()
 }
 
-/// Zeroes the entries of pinned particles.
-fn filter(values: &mut [Vec3], free: &[bool]) {
-    for (value, &free) in values.iter_mut().zip(free) {
-        if !free {
-            *value = Vec3::ZERO;
-        }
+/// Adds what each constraint had to supply in the last solve, `A δ − rhs` at its
+/// particle: the body's push that the filter stood in for.
+fn add_constraint_impulses(pattern: &BlockPattern, constraints: &[VelocityConstraint], ws: &mut ImplicitWorkspace) {
+    if constraints.is_empty() {
+        return;
+    }
+    ws.system.multiply(pattern, &ws.delta, &mut ws.product);
+    for (impulse, c) in ws.constraint_impulses.iter_mut().zip(constraints) {
+        let i = c.particle as usize;
+        *impulse += ws.product[i] - ws.rhs[i];
+    }
+}
+
+/// Applies each particle's constraint filter.
+fn filter(values: &mut [Vec3], filters: &[Mat3]) {
+    for (value, filter) in values.iter_mut().zip(filters) {
+        *value = *filter * *value;
     }
 }
 
@@ -232,23 +277,39 @@ fn precondition(residual: &[Vec3], preconditioner: &[Mat3], out: &mut [Vec3]) {
         .for_each(|((o, r), p)| *o = *p * *r);
 }
 
-/// Solves `system · delta = rhs` over the free particles with block-Jacobi preconditioned
-/// conjugate gradients, from `delta = 0`. Returns the iterations taken. Stops early on a
-/// direction of non-positive curvature, which a semi-definite assembly should not give.
-fn conjugate_gradient(pattern: &BlockPattern, settings: &ImplicitSettings, ws: &mut ImplicitWorkspace) -> u32 {
-    ws.delta.fill(Vec3::ZERO);
-    ws.residual.copy_from_slice(&ws.rhs);
+/// Solves `system · delta = rhs` within the constraint filters, with block-Jacobi
+/// preconditioned conjugate gradients (Baraff & Witkin's modified PCG): `delta` starts at
+/// the prescribed part when `prescribe`, else at zero, and only moves within the filters.
+/// Returns the iterations taken. Stops early on a direction of non-positive curvature,
+/// which a semi-definite assembly should not give.
+fn conjugate_gradient(
+    pattern: &BlockPattern,
+    settings: &ImplicitSettings,
+    prescribe: bool,
+    ws: &mut ImplicitWorkspace,
+) -> u32 {
+    if prescribe {
+        ws.delta.copy_from_slice(&ws.prescribed);
+    } else {
+        ws.delta.fill(Vec3::ZERO);
+    }
+    ws.system.multiply(pattern, &ws.delta, &mut ws.product);
+    for i in 0..ws.residual.len() {
+        ws.residual[i] = ws.rhs[i] - ws.product[i];
+    }
+    filter(&mut ws.residual, &ws.filter);
     precondition(&ws.residual, &ws.preconditioner, &mut ws.preconditioned);
-    filter(&mut ws.preconditioned, &ws.free);
+    filter(&mut ws.preconditioned, &ws.filter);
     ws.direction.copy_from_slice(&ws.preconditioned);
-    let target = f64::from(settings.cg_tolerance).powi(2) * dot(&ws.rhs, &ws.rhs);
+    let filtered_rhs: f64 = ws.rhs.iter().zip(&ws.filter).map(|(r, s)| f64::from((*s * *r).length_squared())).sum();
+    let target = f64::from(settings.cg_tolerance).powi(2) * filtered_rhs;
     let mut rz = dot(&ws.residual, &ws.preconditioned);
     for iteration in 0..settings.cg_max_iterations {
         if dot(&ws.residual, &ws.residual) <= target {
             return iteration;
         }
         ws.system.multiply(pattern, &ws.direction, &mut ws.product);
-        filter(&mut ws.product, &ws.free);
+        filter(&mut ws.product, &ws.filter);
         let curvature = dot(&ws.direction, &ws.product);
         if curvature <= 0.0 {
             return iteration;
@@ -259,7 +320,7 @@ fn conjugate_gradient(pattern: &BlockPattern, settings: &ImplicitSettings, ws: &
             ws.residual[i] -= step * ws.product[i];
         }
         precondition(&ws.residual, &ws.preconditioner, &mut ws.preconditioned);
-        filter(&mut ws.preconditioned, &ws.free);
+        filter(&mut ws.preconditioned, &ws.filter);
         let next = dot(&ws.residual, &ws.preconditioned);
         let ratio = (next / rz) as f32;
         rz = next;

@@ -12,7 +12,9 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::PARALLEL_MIN_LEN;
-use super::implicit::{ImplicitSettings, ImplicitWorkspace, LinearDynamics, Rayleigh, implicit_step};
+use super::implicit::{
+    ImplicitSettings, ImplicitWorkspace, LinearDynamics, Rayleigh, VelocityConstraint, implicit_step,
+};
 
 /// The integration method of a scene (Durupınar D10, Zheng Z4).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -227,10 +229,12 @@ const ERROR_FLOOR: f32 = 1e-6;
 
 /// Advances `(x, v)` from time `t` by `h` [s] with `method`. The caller has filled
 /// `ws.start_acceleration` with the acceleration at `(x, v, t)` (the implicit methods
-/// evaluate their own).
+/// evaluate their own, and honour the contact `constraints`; explicit methods leave
+/// contacts to the contact stage).
 pub fn step(
     method: Integrator,
     dynamics: &mut impl LinearDynamics,
+    constraints: &[VelocityConstraint],
     x: &mut [Vec3],
     v: &mut [Vec3],
     t: f32,
@@ -243,9 +247,11 @@ pub fn step(
     match method {
         Integrator::ImplicitEuler => {
             let euler = ImplicitSettings { theta: 1.0, ..settings.implicit };
-            Ok(implicit_step(&euler, dynamics, x, v, t, h, &mut ws.implicit))
+            Ok(implicit_step(&euler, dynamics, constraints, x, v, t, h, &mut ws.implicit))
         }
-        Integrator::Newmark => Ok(implicit_step(&settings.implicit, dynamics, x, v, t, h, &mut ws.implicit)),
+        Integrator::Newmark => {
+            Ok(implicit_step(&settings.implicit, dynamics, constraints, x, v, t, h, &mut ws.implicit))
+        }
         Integrator::ExplicitEuler => Ok(runge_kutta(&EULER, dynamics, x, v, t, h, ws)),
         Integrator::Midpoint => Ok(runge_kutta(&MIDPOINT, dynamics, x, v, t, h, ws)),
         Integrator::Rk4 => Ok(runge_kutta(&RK4, dynamics, x, v, t, h, ws)),

@@ -1,0 +1,59 @@
+//! Bricis's drapes over solids (B6), checked by their end state: on a table corner the
+//! cloth rests on the top and hangs over both edges that meet at the corner; over a
+//! cylinder a disk rests on the top and hangs down around it. Nothing ends inside a body.
+
+use std::path::Path;
+
+use glam::Vec3;
+use selvedge::Simulation;
+use selvedge::components::Particles;
+use selvedge::scene::load_scene;
+
+const TABLE_TOP: f32 = 0.75;
+
+fn settle(name: &str) -> (Simulation, Vec<Vec3>) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
+    let file = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = Simulation::from_file(&file).unwrap_or_else(|e| panic!("{e}"));
+    for _ in 0..sim.counts().time.frames {
+        sim.step_frame().unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
+    let positions = sim.world_mut().query::<&Particles>().single(sim.world()).expect("one cloth").position.clone();
+    (sim, positions)
+}
+
+#[test]
+fn table_corner_drapes_rest_on_the_top_and_hang_over_both_edges() {
+    for name in ["bricis_table_cotton.ron", "bricis_table_polyester.ron", "bricis_table_mat.ron"] {
+        let (sim, x) = settle(name);
+        let kinetic = sim.probes().get("kinetic_energy_j").expect("probe");
+        assert!(kinetic < 1e-3, "{name}: still moving, {kinetic} J");
+        // Over the table (away from its edges) the cloth lies on the top, never in it.
+        let over: Vec<&Vec3> = x.iter().filter(|p| p.x < -0.03 && p.z < -0.03).collect();
+        assert!(over.len() > x.len() / 3, "{name}: only {} particles over the table", over.len());
+        assert!(over.iter().all(|p| p.y >= TABLE_TOP), "{name}: cloth inside the table");
+        // Most of it lies flat on the top (the stiff mat lifts near the corner, where it
+        // bends over both edges at once).
+        let resting = over.iter().filter(|p| p.y < TABLE_TOP + 0.003).count();
+        assert!(resting * 4 >= over.len() * 3, "{name}: {resting} of {} rest on the top", over.len());
+        // Over each edge some of it hangs well below the top.
+        let lowest =
+            |beyond: &dyn Fn(&Vec3) -> bool| x.iter().filter(|p| beyond(p)).map(|p| p.y).fold(f32::INFINITY, f32::min);
+        assert!(lowest(&|p| p.x > 0.02) < TABLE_TOP - 0.1, "{name}: nothing hangs over the x edge");
+        assert!(lowest(&|p| p.z > 0.02) < TABLE_TOP - 0.1, "{name}: nothing hangs over the z edge");
+    }
+}
+
+#[test]
+fn a_disk_rests_on_a_cylinder_and_hangs_around_it() {
+    let (sim, x) = settle("bricis_cylinder.ron");
+    let radial = |p: &Vec3| Vec3::new(p.x, 0.0, p.z).length();
+    let top: Vec<&Vec3> = x.iter().filter(|p| radial(p) < 0.1).collect();
+    assert!(top.iter().all(|p| (p.y - 0.5).abs() < 0.003), "the centre rests on the top at 0.5 m");
+    assert!(x.iter().all(|p| radial(p) > 0.119 || p.y >= 0.5), "nothing inside the cylinder");
+    assert!(x.iter().map(|p| p.y).fold(f32::INFINITY, f32::min) < 0.42, "the rim hangs down");
+    // The cylinder carries the whole weight: π 0.25² m² × 0.2578 kg/m² × 9.81 m/s².
+    let weight = std::f64::consts::PI * 0.0625 * 0.2578 * 9.81;
+    let force = sim.probes().get("contact_force_n").expect("probe");
+    assert!((force - weight).abs() < 0.02 * weight, "contact force {force} N, weight {weight} N");
+}
