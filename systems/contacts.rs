@@ -56,11 +56,7 @@ pub fn collide_with_bodies(
             velocity,
             &mut touching.0,
         );
-        stats.impulse += totals.impulse;
-        stats.normal_impulse += totals.normal_impulse;
-        stats.friction_impulse += totals.friction_impulse;
-        stats.contact_area += totals.contact_area;
-        stats.max_penetration = stats.max_penetration.max(totals.max_penetration);
+        stats.0.add(&totals);
     }
 }
 

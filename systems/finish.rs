@@ -4,6 +4,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 
 use super::forces::{ForceElements, ForceEnvironment};
+use crate::collision::body_contact::ContactTotals;
 use crate::collision::intersection::count_self_intersections;
 use crate::components::{
     Cloth, Collider, ContactStats, MembraneTriangles, Particles, Pins, SolverWorkspace, Springs, Triangles,
@@ -103,12 +104,8 @@ pub fn measure_contact_probes(
         return;
     }
     let frame_time = f64::from(settings.dt) * f64::from(settings.substeps);
-    let total = cloths.iter().fold(ContactStats::default(), |mut sum, s| {
-        sum.impulse += s.impulse;
-        sum.normal_impulse += s.normal_impulse;
-        sum.friction_impulse += s.friction_impulse;
-        sum.contact_area += s.contact_area;
-        sum.max_penetration = sum.max_penetration.max(s.max_penetration);
+    let total = cloths.iter().fold(ContactTotals::default(), |mut sum, s| {
+        sum.add(&s.0);
         sum
     });
     // Mean force over mean area: (ΣJ / T) / (ΣA / steps) = ΣJ / (dt ΣA).

@@ -45,14 +45,22 @@ pub struct ContactTotals {
     pub max_penetration: f32,
 }
 
+impl ContactTotals {
+    /// Adds `other`'s contacts to these: impulses and areas sum, the penetration is the
+    /// deeper of the two.
+    pub fn add(&mut self, other: &ContactTotals) {
+        self.impulse += other.impulse;
+        self.normal_impulse += other.normal_impulse;
+        self.friction_impulse += other.friction_impulse;
+        self.contact_area += other.contact_area;
+        self.max_penetration = self.max_penetration.max(other.max_penetration);
+    }
+}
+
 /// One particle's contact outcome, combined in particle order.
 #[derive(Debug, Clone, Copy, Default)]
 struct ParticleContact {
-    impulse: Vec3,
-    normal: f32,
-    friction: f32,
-    area: f32,
-    penetration: f32,
+    totals: ContactTotals,
     touch: Option<Touch>,
 }
 
@@ -135,8 +143,8 @@ pub fn resolve_body_contacts(
                         (signed, outward)
                     }
                 };
-                outcome.penetration = outcome.penetration.max(-signed);
-                outcome.area = area(i);
+                outcome.totals.max_penetration = outcome.totals.max_penetration.max(-signed);
+                outcome.totals.contact_area = area(i);
                 *x += (body.thickness - signed) * outward;
                 let surface = body.state.velocity_at(*x);
                 outcome.touch = Some(Touch { particle: i as u32, normal: outward, surface_velocity: surface });
@@ -147,13 +155,13 @@ pub fn resolve_body_contacts(
                     // Take back the whole step's motion relative to the body.
                     *x -= h * (relative - relative.dot(outward) * outward);
                     *v = surface;
-                    outcome.normal += mass * approach.abs();
-                    outcome.friction += mass * (relative - approach * outward).length();
+                    outcome.totals.normal_impulse += mass * approach.abs();
+                    outcome.totals.friction_impulse += mass * (relative - approach * outward).length();
                     continue;
                 }
                 // What an implicit solve's constraint pushed along the normal counts as
                 // contact force (signed: its pulls cancel its pushes across the cloth).
-                outcome.normal += support[i].dot(outward);
+                outcome.totals.normal_impulse += support[i].dot(outward);
                 // The normal velocity this response removes bounds friction. (Friction from
                 // the constraint's own impulse is left out: per particle it mixes the
                 // body's push with stiff internal forces and made resting cloth sticky.)
@@ -171,21 +179,17 @@ pub fn resolve_body_contacts(
                 };
                 *v = surface + slip + (approach - normal_part) * outward;
                 *x += h * (slip - tangential);
-                outcome.normal += mass * removed;
-                outcome.friction += mass * (tangential - slip).length();
+                outcome.totals.normal_impulse += mass * removed;
+                outcome.totals.friction_impulse += mass * (tangential - slip).length();
             }
-            outcome.impulse = (*v - before) / inv_mass[i] + support[i];
+            outcome.totals.impulse = (*v - before) / inv_mass[i] + support[i];
             outcome
         })
         .collect();
     touching.clear();
     touching.extend(outcomes.iter().filter_map(|o| o.touch));
     outcomes.iter().fold(ContactTotals::default(), |mut totals, o| {
-        totals.impulse += o.impulse;
-        totals.normal_impulse += o.normal;
-        totals.friction_impulse += o.friction;
-        totals.contact_area += o.area;
-        totals.max_penetration = totals.max_penetration.max(o.penetration);
+        totals.add(&o.totals);
         totals
     })
 }
@@ -196,6 +200,14 @@ mod tests {
     use parry3d::shape::{Cuboid, HalfSpace};
 
     use super::*;
+
+    /// Resolves one body against particles `x`, `v` of unit inverse mass and area, with no
+    /// implicit support, after a step of `h` from `start`.
+    fn resolve(body: ContactBody<'_>, h: f32, start: &[Vec3], x: &mut [Vec3], v: &mut [Vec3]) -> ContactTotals {
+        let ones = vec![1.0; x.len()];
+        let support = vec![Vec3::ZERO; x.len()];
+        resolve_body_contacts(&[body], &ones, &ones, |_| 1.0, h, start, &support, x, v, &mut Vec::new())
+    }
 
     fn ground() -> (HalfSpace, ColliderState) {
         (HalfSpace::new(Vec3::Y), ColliderState { pose: Pose3::IDENTITY, linear: Vec3::ZERO, angular: Vec3::ZERO })
@@ -235,18 +247,7 @@ mod tests {
         let body = ContactBody { shape: &shape, state, friction: 2.0, thickness: 0.001, stick: false };
         let mut x = [Vec3::new(0.0, 0.0005, 0.0)];
         let mut v = [Vec3::new(0.5, -0.2, 0.0)];
-        resolve_body_contacts(
-            &[body],
-            &[1.0],
-            &[1.0],
-            |_| 1.0,
-            0.0,
-            &x.clone(),
-            &[Vec3::ZERO; 4][..x.len()],
-            &mut x,
-            &mut v,
-            &mut Vec::new(),
-        );
+        resolve(body, 0.0, &x.clone(), &mut x, &mut v);
         assert!((x[0].y - 0.001).abs() < 1e-7, "kept at the contact thickness");
         assert!((v[0] - Vec3::new(0.3, 0.0, 0.0)).length() < 1e-6, "moves with the surface");
     }
@@ -260,18 +261,7 @@ mod tests {
         let start = [Vec3::new(0.1, 0.05, 0.0)];
         let mut x = [Vec3::new(0.1, -0.05, 0.0)];
         let mut v = [Vec3::new(0.0, -10.0, 0.0)];
-        resolve_body_contacts(
-            &[body],
-            &[1.0],
-            &[1.0],
-            |_| 1.0,
-            0.01,
-            &start,
-            &[Vec3::ZERO; 4][..x.len()],
-            &mut x,
-            &mut v,
-            &mut Vec::new(),
-        );
+        resolve(body, 0.01, &start, &mut x, &mut v);
         assert!((x[0].y - 0.0015).abs() < 1e-5, "stopped on the upper face: {}", x[0].y);
         assert!(v[0].y.abs() < 1e-6, "its approach velocity removed");
     }
@@ -284,18 +274,7 @@ mod tests {
         let start = [Vec3::new(0.0, 0.0008, 0.0)];
         let mut x = [Vec3::new(0.01, 0.0009, 0.0)];
         let mut v = [Vec3::new(1.0, 0.1, 0.0)];
-        resolve_body_contacts(
-            &[body],
-            &[1.0],
-            &[1.0],
-            |_| 1.0,
-            0.01,
-            &start,
-            &[Vec3::ZERO; 4][..x.len()],
-            &mut x,
-            &mut v,
-            &mut Vec::new(),
-        );
+        resolve(body, 0.01, &start, &mut x, &mut v);
         assert_eq!(v[0], Vec3::new(0.2, 0.0, 0.0));
         assert!((x[0] - Vec3::new(0.002, 0.001, 0.0)).length() < 1e-6, "moved with the body: {}", x[0]);
     }

@@ -1,10 +1,9 @@
 //! Solid bodies cloth collides with, and what contact did to a cloth over a frame.
 
 use bevy_ecs::prelude::*;
-use glam::Vec3;
 use parry3d::shape::SharedShape;
 
-use crate::collision::body_contact::Touch;
+use crate::collision::body_contact::{ContactTotals, Touch};
 use crate::collision::collider::ColliderMotion;
 
 /// A static or kinematic solid body (E5, D11, B5): a parry3d shape that moves along its
@@ -44,15 +43,4 @@ pub struct Touching(pub Vec<Touch>);
 
 /// Contact of one cloth with the bodies, summed over the steps of the current frame.
 #[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
-pub struct ContactStats {
-    /// Vector sum of the impulses on the cloth [N·s].
-    pub impulse: Vec3,
-    /// Sum of normal impulse magnitudes [N·s].
-    pub normal_impulse: f32,
-    /// Sum of friction impulse magnitudes [N·s].
-    pub friction_impulse: f32,
-    /// Contact area summed over the steps [m²].
-    pub contact_area: f32,
-    /// Deepest penetration into a body during the frame [m].
-    pub max_penetration: f32,
-}
+pub struct ContactStats(pub ContactTotals);
