@@ -8,6 +8,7 @@ use glam::Vec3;
 
 use crate::builders::pins::PinSelection;
 use crate::builders::tear::Cut;
+use crate::collision::self_contact::{ContactMesh, SelfContactReport, SelfContactSolver};
 use crate::solver::forces::Air;
 use crate::solver::integrate::{Integrator, MethodSettings};
 use crate::solver::probes::ClothProbe;
@@ -136,4 +137,26 @@ pub struct ScheduledEdit {
 pub struct ScheduledEdits {
     /// Pending edits, earliest first.
     pub pending: Vec<ScheduledEdit>,
+}
+
+/// Every self-colliding cloth as one contact mesh (so layers collide with one another as
+/// well as with themselves), the trees over it kept from step to step, and what self
+/// contact did in the current frame.
+#[derive(Resource, Debug, Default)]
+pub struct ClothContacts {
+    /// The cloths in the mesh: entity, the topology build it was made from, and the
+    /// global number of its first vertex.
+    pub members: Vec<(Entity, u32, u32)>,
+    /// The combined mesh.
+    pub mesh: ContactMesh,
+    /// Trees and scratch space.
+    pub solver: SelfContactSolver,
+    /// Gathered start positions, end positions and velocities of a step.
+    pub start: Vec<Vec3>,
+    /// End positions.
+    pub end: Vec<Vec3>,
+    /// Velocities.
+    pub velocity: Vec<Vec3>,
+    /// Sums over the steps of the current frame.
+    pub frame: SelfContactReport,
 }

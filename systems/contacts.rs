@@ -1,12 +1,14 @@
-//! Contact of cloth with solid bodies.
+//! Contact of cloth with solid bodies and with cloth.
 
 use bevy_ecs::prelude::*;
 
 use crate::collision::body_contact::{ContactBody, resolve_body_contacts};
+use crate::collision::self_contact::{ContactMesh, SelfContactReport};
 use crate::components::{
-    Cloth, ClothMaterial, ClothTopology, Collider, ContactStats, Particles, SolverWorkspace, Touching,
+    Cloth, ClothMaterial, ClothTopology, Collider, ContactStats, Particles, SelfCollision, SolverWorkspace, Touching,
+    Triangles,
 };
-use crate::resources::{SimClock, StepSettings};
+use crate::resources::{ClothContacts, SimClock, StepSettings};
 use crate::schedule::{FrameSystems, SimSchedules, SubstepSystems};
 
 /// Resolves every cloth's contacts with every collider at the end of the step (the
@@ -60,15 +62,69 @@ pub fn collide_with_bodies(
     }
 }
 
+/// Resolves cloth–cloth contact of every self-colliding cloth, all together as one mesh
+/// so that layers meet one another: the step from where it started to where the
+/// integrator, the constraints and the bodies put it is made free of crossings. Runs in
+/// [`SubstepSystems::SelfContacts`].
+pub fn collide_cloths(
+    settings: Res<StepSettings>,
+    mut contacts: ResMut<ClothContacts>,
+    mut cloths: Query<(Entity, &mut Particles, &Triangles, &ClothTopology, &SolverWorkspace, &SelfCollision)>,
+) {
+    let contacts = &mut *contacts;
+    let mut members = Vec::new();
+    let mut count = 0;
+    for (entity, particles, _, topology, ..) in &cloths {
+        members.push((entity, topology.builds, count));
+        count += particles.len() as u32;
+    }
+    if members.is_empty() {
+        return;
+    }
+    if members != contacts.members {
+        let mut mesh = ContactMesh::default();
+        for (_, particles, triangles, topology, _, collision) in &cloths {
+            let offset = mesh.len() as u32;
+            mesh.triangles.extend(triangles.indices.iter().map(|t| t.map(|k| k + offset)));
+            mesh.inv_mass.extend_from_slice(&topology.free_inv_mass);
+            mesh.half_gap.extend(std::iter::repeat_n(0.5 * collision.separation, particles.len()));
+            mesh.friction.extend(std::iter::repeat_n(collision.friction, particles.len()));
+        }
+        mesh.edges = ContactMesh::edges_of(&mesh.triangles);
+        contacts.mesh = mesh;
+        contacts.members = members;
+    }
+    let ClothContacts { mesh, solver, start, end, velocity, frame, .. } = contacts;
+    start.clear();
+    end.clear();
+    velocity.clear();
+    for (_, particles, _, _, workspace, _) in &cloths {
+        start.extend_from_slice(&workspace.step_start);
+        end.extend_from_slice(&particles.position);
+        velocity.extend_from_slice(&particles.velocity);
+    }
+    let report = solver.resolve(mesh, settings.dt, start, end, velocity);
+    frame.add(&report);
+    let mut offset = 0;
+    for (_, mut particles, ..) in &mut cloths {
+        let range = offset..offset + particles.len();
+        particles.position.copy_from_slice(&end[range.clone()]);
+        particles.velocity.copy_from_slice(&velocity[range]);
+        offset += particles.len();
+    }
+}
+
 /// Starts each frame's contact sums from zero. Runs in [`FrameSystems::Prepare`].
-pub fn reset_contact_stats(mut cloths: Query<&mut ContactStats>) {
+pub fn reset_contact_stats(mut cloths: Query<&mut ContactStats>, mut contacts: ResMut<ClothContacts>) {
     for mut stats in &mut cloths {
         *stats = ContactStats::default();
     }
+    contacts.frame = SelfContactReport::default();
 }
 
 /// Adds this module's systems.
 pub fn add_to(schedules: &mut SimSchedules) {
     schedules.frame.add_systems(reset_contact_stats.in_set(FrameSystems::Prepare));
     schedules.substep.add_systems(collide_with_bodies.in_set(SubstepSystems::BodyContacts));
+    schedules.substep.add_systems(collide_cloths.in_set(SubstepSystems::SelfContacts));
 }

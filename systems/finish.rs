@@ -7,9 +7,12 @@ use super::forces::{ForceElements, ForceEnvironment};
 use crate::collision::body_contact::ContactTotals;
 use crate::collision::intersection::count_self_intersections;
 use crate::components::{
-    Cloth, Collider, ContactStats, MembraneTriangles, Particles, Pins, SolverWorkspace, Springs, Triangles,
+    Cloth, Collider, ContactStats, MembraneTriangles, Particles, Pins, SelfCollision, SolverWorkspace, Springs,
+    Triangles,
 };
-use crate::resources::{DivergenceLimit, HealthProblem, HealthReport, ProbeRequests, Probes, SimClock, StepSettings};
+use crate::resources::{
+    ClothContacts, DivergenceLimit, HealthProblem, HealthReport, ProbeRequests, Probes, SimClock, StepSettings,
+};
 use crate::schedule::{FrameSystems, SimSchedules};
 use crate::solver::health::check_health;
 use crate::solver::pins::pin_reaction;
@@ -122,6 +125,26 @@ pub fn measure_contact_probes(
     probes.set("max_penetration_m", f64::from(total.max_penetration));
 }
 
+/// Reports self contact over the frame, when a cloth collides with itself:
+/// `self_contact_pairs` (mean number of pairs closer than their separation per step),
+/// `self_impacts` (continuous collisions resolved by impulses in the frame) and
+/// `impact_zone_rounds` (rounds of rigid impact zones the frame needed; 0 when impulses
+/// sufficed). Runs in [`FrameSystems::Finish`].
+pub fn measure_self_contact_probes(
+    settings: Res<StepSettings>,
+    contacts: Res<ClothContacts>,
+    cloths: Query<(), With<SelfCollision>>,
+    mut probes: ResMut<Probes>,
+) {
+    if cloths.is_empty() {
+        return;
+    }
+    let frame = &contacts.frame;
+    probes.set("self_contact_pairs", f64::from(frame.proximity) / f64::from(settings.substeps.max(1)));
+    probes.set("self_impacts", f64::from(frame.impacts));
+    probes.set("impact_zone_rounds", f64::from(frame.zone_rounds));
+}
+
 /// Counts the frame. Runs in [`FrameSystems::Finish`], last.
 pub fn count_frame(mut clock: ResMut<SimClock>) {
     clock.frame += 1;
@@ -130,7 +153,14 @@ pub fn count_frame(mut clock: ResMut<SimClock>) {
 /// Adds this module's systems.
 pub fn add_to(schedules: &mut SimSchedules) {
     schedules.frame.add_systems(
-        (check_cloth_health, measure_probes, measure_cloth_probes, measure_contact_probes, count_frame)
+        (
+            check_cloth_health,
+            measure_probes,
+            measure_cloth_probes,
+            measure_contact_probes,
+            measure_self_contact_probes,
+            count_frame,
+        )
             .chain()
             .in_set(FrameSystems::Finish),
     );

@@ -2,5 +2,8 @@
 //! contact response kernel ([`body_contact`]). Pure: no ECS.
 
 pub mod body_contact;
+pub mod bvh;
 pub mod collider;
 pub mod intersection;
+pub mod primitives;
+pub mod self_contact;

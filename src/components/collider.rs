@@ -44,3 +44,14 @@ pub struct Touching(pub Vec<Touch>);
 /// Contact of one cloth with the bodies, summed over the steps of the current frame.
 #[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
 pub struct ContactStats(pub ContactTotals);
+
+/// A cloth that collides with itself and with every other cloth that has this component
+/// (E3, Z5): the pairs keep `separation` apart between mid-surfaces.
+#[derive(Component, Debug, Clone, Copy, PartialEq)]
+pub struct SelfCollision {
+    /// Distance kept between two layers' mid-surfaces [m]; a pair of different cloths keeps
+    /// the mean of their two separations.
+    pub separation: f32,
+    /// Coulomb friction coefficient between layers [-]; a pair uses the mean.
+    pub friction: f32,
+}

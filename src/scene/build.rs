@@ -17,11 +17,12 @@ use crate::builders::surface::limited_edges;
 use crate::builders::tear::Cut;
 use crate::collision::collider::{ColliderMotion, ColliderShape, Pose};
 use crate::components::{
-    Cloth, ClothTopology, Collider, ContactStats, Pins, RenderMesh, SolverWorkspace, StrainLimit, Touching, UserForces,
+    Cloth, ClothTopology, Collider, ContactStats, Pins, RenderMesh, SelfCollision, SolverWorkspace, StrainLimit,
+    Touching, UserForces,
 };
 use crate::resources::{
-    AirSettings, DivergenceLimit, EditAction, Gravity, HealthReport, IntegratorStats, ProbeRequests, Probes,
-    ScheduledEdit, ScheduledEdits, SimClock, SolverSettings, StepSettings,
+    AirSettings, ClothContacts, DivergenceLimit, EditAction, Gravity, HealthReport, IntegratorStats, ProbeRequests,
+    Probes, ScheduledEdit, ScheduledEdits, SimClock, SolverSettings, StepSettings,
 };
 use crate::solver::forces::{Air, Gust};
 use crate::solver::implicit::{ImplicitSettings, Rayleigh};
@@ -132,7 +133,6 @@ fn spawn_colliders(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
 pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<SceneCounts, SceneError> {
     let time = time_plan(scene)?;
     let mut counts = SceneCounts { time, cloths: 0, particles: 0, springs: 0, triangles: 0, pins: 0 };
-    let mut entities = Vec::new();
     for (index, desc) in scene.cloths.iter().enumerate() {
         let data = build_cloth(desc, index, base_dir)?;
         let mut pins = Pins::default();
@@ -170,12 +170,29 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
             );
             StrainLimit { pairs, rest_length, max_strain: limit.max_strain, iterations: limit.iterations }
         });
+        let self_collision = desc
+            .self_collision()
+            .map(|(separation, friction)| {
+                let shortest = shortest_edge(&data.particles.rest_position, &data.triangles.indices);
+                if separation <= 0.0 || separation >= 0.5 * shortest {
+                    return Err(SceneError::invalid(
+                        format!("cloths[{index}].self_collision.separation"),
+                        format!(
+                            "{separation} m must be above zero and below half the cloth's shortest edge ({shortest} m): \
+                             neighbouring triangles of the flat cloth would push each other; give a smaller separation or a \
+                             coarser mesh"
+                        ),
+                    ));
+                }
+                Ok(SelfCollision { separation, friction })
+            })
+            .transpose()?;
         counts.cloths += 1;
         counts.particles += count;
         counts.springs += data.springs.len();
         counts.triangles += data.triangles.len();
         counts.pins += pins.len();
-        entities.push((
+        let mut cloth = world.spawn((
             (
                 Cloth { name: desc.name.clone(), layout: data.layout, thickness: desc.contact_thickness() },
                 desc.resolved_material().expect("build_cloth refused cloths without one"),
@@ -196,8 +213,10 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
                 RenderMesh::default(),
             ),
         ));
+        if let Some(collision) = self_collision {
+            cloth.insert(collision);
+        }
     }
-    world.spawn_batch(entities);
 
     world.insert_resource(StepSettings { dt: time.dt, substeps: time.substeps });
     world.insert_resource(Gravity(scene.gravity));
@@ -233,6 +252,7 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
     world.insert_resource(HealthReport::default());
     world.insert_resource(Probes::default());
     world.insert_resource(IntegratorStats::default());
+    world.insert_resource(ClothContacts::default());
     let mut pending: Vec<ScheduledEdit> = scene
         .edits
         .iter()
@@ -252,4 +272,13 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
     world.insert_resource(ScheduledEdits { pending });
     world.insert_resource(ProbeRequests(scene.probes.clone()));
     Ok(counts)
+}
+
+/// Length of the shortest triangle side [m].
+fn shortest_edge(positions: &[Vec3], triangles: &[[u32; 3]]) -> f32 {
+    triangles
+        .iter()
+        .flat_map(|&[a, b, c]| [(a, b), (b, c), (c, a)])
+        .map(|(p, q)| positions[p as usize].distance(positions[q as usize]))
+        .fold(f32::INFINITY, f32::min)
 }

@@ -210,7 +210,25 @@ pub struct ClothDesc {
     /// A bound on warp and weft strain, enforced after every step.
     #[serde(default)]
     pub strain_limit: Option<StrainLimitDesc>,
+    /// Contact of the cloth with itself and with the other cloths that have it.
+    #[serde(default)]
+    pub self_collision: Option<SelfCollisionDesc>,
 }
+
+/// Cloth–cloth contact: `self_collision: ()` turns it on with the defaults.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SelfCollisionDesc {
+    /// Distance kept between layers' mid-surfaces [m]; the cloth's contact thickness when
+    /// not given. Must be below half the shortest edge of the cloth, or neighbouring
+    /// triangles of a flat cloth would push each other.
+    pub separation: Option<f32>,
+    /// Coulomb friction between layers [-]; 0.2 when not given.
+    pub friction: Option<f32>,
+}
+
+/// Friction between layers when a scene does not give one.
+pub const DEFAULT_CLOTH_FRICTION: f32 = 0.2;
 
 /// Strain limiting: edges are projected back to at most `max_strain` after every step.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -259,6 +277,13 @@ impl ClothDesc {
     /// The contact thickness: as given, else the fabric's, else [`DEFAULT_THICKNESS`].
     pub fn contact_thickness(&self) -> f32 {
         self.thickness.or_else(|| self.fabric.map(|f| f.measurements().thickness)).unwrap_or(DEFAULT_THICKNESS)
+    }
+
+    /// The separation and friction of its self-collision, with defaults filled in.
+    pub fn self_collision(&self) -> Option<(f32, f32)> {
+        self.self_collision.map(|c| {
+            (c.separation.unwrap_or_else(|| self.contact_thickness()), c.friction.unwrap_or(DEFAULT_CLOTH_FRICTION))
+        })
     }
 
     /// The element material: the one given, or the fabric's.

@@ -244,6 +244,14 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         if let Some(thickness) = cloth.thickness {
             non_negative(&field("thickness"), thickness)?;
         }
+        if let Some(collision) = cloth.self_collision {
+            if let Some(separation) = collision.separation {
+                positive(&field("self_collision.separation"), separation)?;
+            }
+            if let Some(friction) = collision.friction {
+                non_negative(&field("self_collision.friction"), friction)?;
+            }
+        }
         if let Some(limit) = cloth.strain_limit {
             positive(&field("strain_limit.max_strain"), limit.max_strain)?;
             if limit.iterations == 0 {

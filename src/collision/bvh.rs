@@ -1,0 +1,267 @@
+//! An AABB tree over a fixed set of primitives (Zheng §3.6, Z7, E3): built top-down from
+//! the primitives' centres, then refitted as they move ("lazy refit": the topology stays,
+//! only the boxes change) and rebuilt when refitting has made it loose.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::solver::PARALLEL_MIN_LEN;
+
+/// An axis-aligned box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb {
+    /// Lower corner.
+    pub min: Vec3,
+    /// Upper corner.
+    pub max: Vec3,
+}
+
+impl Aabb {
+    /// The box that holds nothing: the identity of [`Aabb::union`].
+    pub const EMPTY: Aabb = Aabb { min: Vec3::INFINITY, max: Vec3::NEG_INFINITY };
+
+    /// The smallest box around `points`.
+    pub fn around(points: impl IntoIterator<Item = Vec3>) -> Aabb {
+        points.into_iter().fold(Aabb::EMPTY, |b, p| Aabb { min: b.min.min(p), max: b.max.max(p) })
+    }
+
+    /// The smallest box holding both.
+    pub fn union(self, other: Aabb) -> Aabb {
+        Aabb { min: self.min.min(other.min), max: self.max.max(other.max) }
+    }
+
+    /// This box grown by `margin` on every side.
+    pub fn inflated(self, margin: f32) -> Aabb {
+        Aabb { min: self.min - Vec3::splat(margin), max: self.max + Vec3::splat(margin) }
+    }
+
+    /// Whether the two boxes share a point.
+    pub fn overlaps(&self, other: &Aabb) -> bool {
+        !(self.min.cmpgt(other.max).any() || other.min.cmpgt(self.max).any())
+    }
+
+    fn centre(&self) -> Vec3 {
+        0.5 * (self.min + self.max)
+    }
+
+    fn surface_area(&self) -> f32 {
+        let d = (self.max - self.min).max(Vec3::ZERO);
+        2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
+    }
+}
+
+/// A node: a leaf holds one primitive; an inner node its two children, which come after
+/// it in [`Bvh::nodes`], so a reverse sweep visits children before parents.
+#[derive(Debug, Clone, Copy)]
+struct Node {
+    aabb: Aabb,
+    /// The primitive of a leaf, or [`INNER`].
+    primitive: u32,
+    /// The children of an inner node.
+    children: [u32; 2],
+}
+
+const INNER: u32 = u32::MAX;
+
+/// How much looser than at its last build a refitted tree may get, as the ratio of the
+/// summed surface areas of its inner boxes, before it is rebuilt.
+const REBUILD_RATIO: f32 = 2.0;
+
+/// An AABB tree with one primitive per leaf.
+#[derive(Debug, Clone, Default)]
+pub struct Bvh {
+    nodes: Vec<Node>,
+    /// Node of each primitive's leaf.
+    leaf_of: Vec<u32>,
+    /// Summed inner surface area right after the last build.
+    built_cost: f32,
+    /// Number of builds, for tests and statistics.
+    builds: u64,
+}
+
+impl Bvh {
+    /// A tree over primitives with these boxes.
+    pub fn build(boxes: &[Aabb]) -> Bvh {
+        let mut tree = Bvh::default();
+        tree.rebuild(boxes);
+        tree
+    }
+
+    /// Builds the tree anew over `boxes`: each node splits its primitives at the median
+    /// of their centres along the longest side of the centres' box (centres only, so
+    /// coinciding primitives cannot make the split loop).
+    pub fn rebuild(&mut self, boxes: &[Aabb]) {
+        self.nodes.clear();
+        self.leaf_of = vec![0; boxes.len()];
+        let mut order: Vec<u32> = (0..boxes.len() as u32).collect();
+        let centres: Vec<Vec3> = boxes.iter().map(Aabb::centre).collect();
+        if !boxes.is_empty() {
+            self.split(&mut order, &centres, boxes);
+        }
+        self.built_cost = self.inner_cost();
+        self.builds += 1;
+    }
+
+    /// Adds the subtree over `primitives` and returns its node; boxes are filled in.
+    fn split(&mut self, primitives: &mut [u32], centres: &[Vec3], boxes: &[Aabb]) -> u32 {
+        let index = self.nodes.len() as u32;
+        if let [primitive] = primitives {
+            self.nodes.push(Node { aabb: boxes[*primitive as usize], primitive: *primitive, children: [0; 2] });
+            self.leaf_of[*primitive as usize] = index;
+            return index;
+        }
+        self.nodes.push(Node { aabb: Aabb::EMPTY, primitive: INNER, children: [0; 2] });
+        let spread = Aabb::around(primitives.iter().map(|&p| centres[p as usize]));
+        let extent = spread.max - spread.min;
+        let axis = if extent.x >= extent.y && extent.x >= extent.z {
+            0
+        } else if extent.y >= extent.z {
+            1
+        } else {
+            2
+        };
+        let middle = primitives.len() / 2;
+        primitives.select_nth_unstable_by(middle, |&a, &b| {
+            centres[a as usize][axis].total_cmp(&centres[b as usize][axis]).then(a.cmp(&b))
+        });
+        let (left, right) = primitives.split_at_mut(middle);
+        let first = self.split(left, centres, boxes);
+        let second = self.split(right, centres, boxes);
+        let aabb = self.nodes[first as usize].aabb.union(self.nodes[second as usize].aabb);
+        self.nodes[index as usize] = Node { aabb, primitive: INNER, children: [first, second] };
+        index
+    }
+
+    /// Puts the primitives' new boxes into the leaves and recomputes every inner box,
+    /// children before parents; rebuilds instead when the tree has become
+    /// [`REBUILD_RATIO`] times looser than when it was built, or when the number of
+    /// primitives changed. Returns whether it rebuilt.
+    pub fn refit(&mut self, boxes: &[Aabb]) -> bool {
+        if boxes.len() != self.leaf_of.len() {
+            self.rebuild(boxes);
+            return true;
+        }
+        self.nodes.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).for_each(|node| {
+            if node.primitive != INNER {
+                node.aabb = boxes[node.primitive as usize];
+            }
+        });
+        for index in (0..self.nodes.len()).rev() {
+            let node = self.nodes[index];
+            if node.primitive == INNER {
+                let [a, b] = node.children.map(|c| self.nodes[c as usize].aabb);
+                self.nodes[index].aabb = a.union(b);
+            }
+        }
+        if self.inner_cost() > REBUILD_RATIO * self.built_cost.max(f32::MIN_POSITIVE) {
+            self.rebuild(boxes);
+            return true;
+        }
+        false
+    }
+
+    fn inner_cost(&self) -> f32 {
+        self.nodes.iter().filter(|n| n.primitive == INNER).map(|n| n.aabb.surface_area()).sum()
+    }
+
+    /// Calls `visit` with every primitive whose box overlaps `query`, top-down with
+    /// pruning.
+    pub fn query(&self, query: &Aabb, mut visit: impl FnMut(u32)) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack = [0u32; 64];
+        let mut depth = 1;
+        while depth > 0 {
+            depth -= 1;
+            let node = &self.nodes[stack[depth] as usize];
+            if !node.aabb.overlaps(query) {
+                continue;
+            }
+            if node.primitive != INNER {
+                visit(node.primitive);
+            } else {
+                stack[depth] = node.children[0];
+                stack[depth + 1] = node.children[1];
+                depth += 2;
+            }
+        }
+    }
+
+    /// How many times the tree was built.
+    pub fn builds(&self) -> u64 {
+        self.builds
+    }
+
+    /// Number of primitives.
+    pub fn len(&self) -> usize {
+        self.leaf_of.len()
+    }
+
+    /// Whether the tree holds nothing.
+    pub fn is_empty(&self) -> bool {
+        self.leaf_of.is_empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cube(at: Vec3, half: f32) -> Aabb {
+        Aabb { min: at - Vec3::splat(half), max: at + Vec3::splat(half) }
+    }
+
+    fn brute_force(boxes: &[Aabb], query: &Aabb) -> Vec<u32> {
+        (0..boxes.len() as u32).filter(|&i| boxes[i as usize].overlaps(query)).collect()
+    }
+
+    fn found(tree: &Bvh, query: &Aabb) -> Vec<u32> {
+        let mut hits = Vec::new();
+        tree.query(query, |p| hits.push(p));
+        hits.sort_unstable();
+        hits
+    }
+
+    /// A scattered, deterministic cloud of small boxes.
+    fn cloud(n: usize, shift: f32) -> Vec<Aabb> {
+        (0..n)
+            .map(|i| {
+                let s = i as f32;
+                cube(Vec3::new((s * 0.618).fract(), (s * 0.414).fract() + shift * s.sin(), (s * 0.732).fract()), 0.02)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn queries_find_exactly_the_overlapping_boxes_after_build_and_refit() {
+        let boxes = cloud(500, 0.0);
+        let mut tree = Bvh::build(&boxes);
+        let queries: Vec<Aabb> = (0..40).map(|k| cube(Vec3::splat(k as f32 / 40.0), 0.05)).collect();
+        for q in &queries {
+            assert_eq!(found(&tree, q), brute_force(&boxes, q));
+        }
+        let moved = cloud(500, 0.01);
+        assert!(!tree.refit(&moved), "a small motion refits without rebuilding");
+        for q in &queries {
+            assert_eq!(found(&tree, q), brute_force(&moved, q));
+        }
+        assert_eq!(tree.builds(), 1);
+    }
+
+    #[test]
+    fn a_tree_loosened_by_large_motion_is_rebuilt() {
+        let boxes = cloud(300, 0.0);
+        let mut tree = Bvh::build(&boxes);
+        // Shuffle the primitives far apart: neighbours in the tree are no longer close.
+        let scrambled: Vec<Aabb> = boxes
+            .iter()
+            .enumerate()
+            .map(|(i, b)| cube(b.centre() * 0.1 + Vec3::splat(((i * 7919) % 300) as f32 / 30.0), 0.02))
+            .collect();
+        assert!(tree.refit(&scrambled));
+        assert_eq!(tree.builds(), 2);
+        let q = cube(Vec3::splat(5.0), 0.5);
+        assert_eq!(found(&tree, &q), brute_force(&scrambled, &q));
+    }
+}

@@ -1,0 +1,627 @@
+//! Cloth against cloth (E3, Z5, Z7, D11): after each step, the motion of every vertex
+//! from where the step started to where it ended is made free of crossings, in three
+//! stages of increasing force (Bridson, Fedkiw and Anderson 2002; Zheng §3.2–3.5):
+//!
+//! 1. **Proximity.** Point–triangle and edge–edge pairs closer than their separation δ at
+//!    the start of the step get an inelastic impulse that stops their approach and
+//!    restores a fraction of the missing gap, with Coulomb friction.
+//! 2. **Continuous collision.** Pairs whose straight-line paths become coplanar within
+//!    the step (the cubic of Zheng eq. 3.22) and touch there get an impulse that leaves
+//!    them a sliver apart at the end of the step; repeated for a few passes.
+//! 3. **Impact zones** (Provot 1997, Bridson 2002). Vertices of collisions still left are
+//!    merged into zones that move rigidly for the step; zones grow until nothing collides.
+//!    A rigid motion cannot create a crossing inside a zone, so if the step started
+//!    untangled it ends untangled; in the last resort every vertex keeps its start
+//!    position.
+//!
+//! Impulses are split by mass (Zheng eq. 3.30, Bridson's weights): a pinned vertex has
+//! infinite mass and does not move. Impulses are applied one pair after another in a
+//! fixed order, so results do not depend on the thread count.
+
+use std::collections::BTreeMap;
+
+use glam::{Quat, Vec3};
+use rayon::prelude::*;
+
+use super::bvh::{Aabb, Bvh};
+use super::primitives::{Sweep, closest_between_segments, closest_on_triangle};
+use crate::solver::PARALLEL_MIN_LEN;
+
+/// The cloths that collide with one another, as one mesh with global vertex numbers.
+#[derive(Debug, Clone, Default)]
+pub struct ContactMesh {
+    /// Triangles.
+    pub triangles: Vec<[u32; 3]>,
+    /// Edges of the triangles, each once, smaller vertex first.
+    pub edges: Vec<[u32; 2]>,
+    /// Inverse masses, zero for pinned vertices [1/kg].
+    pub inv_mass: Vec<f32>,
+    /// Half the separation each vertex keeps from other cloth [m]: a pair keeps the sum of
+    /// its two sides' halves.
+    pub half_gap: Vec<f32>,
+    /// Each vertex's Coulomb friction coefficient; a pair uses the mean of its sides.
+    pub friction: Vec<f32>,
+}
+
+impl ContactMesh {
+    /// The edges of `triangles`, each once, sorted.
+    pub fn edges_of(triangles: &[[u32; 3]]) -> Vec<[u32; 2]> {
+        let mut edges: Vec<[u32; 2]> = triangles
+            .iter()
+            .flat_map(|&[a, b, c]| [[a, b], [b, c], [c, a]])
+            .map(|[p, q]| [p.min(q), p.max(q)])
+            .collect();
+        edges.sort_unstable();
+        edges.dedup();
+        edges
+    }
+
+    /// Number of vertices.
+    pub fn len(&self) -> usize {
+        self.inv_mass.len()
+    }
+
+    /// Whether the mesh has no vertex.
+    pub fn is_empty(&self) -> bool {
+        self.inv_mass.is_empty()
+    }
+}
+
+/// Fraction of the missing gap a proximity impulse restores in one step.
+const GAP_RECOVERY: f32 = 0.25;
+/// Gap, as a fraction of δ, a continuous-collision impulse leaves between a pair.
+const IMPACT_GAP: f32 = 0.1;
+/// Passes of continuous collision before impact zones take over.
+const IMPACT_PASSES: u32 = 6;
+/// Rounds of zone growth before every vertex is held at its start.
+const ZONE_ROUNDS: u32 = 100;
+
+/// What self-contact did in one step.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SelfContactReport {
+    /// Pairs closer than their separation at the start of the step.
+    pub proximity: u32,
+    /// Continuous collisions resolved by impulses.
+    pub impacts: u32,
+    /// Rounds of impact zones needed (0 when impulses sufficed).
+    pub zone_rounds: u32,
+    /// Whether the last resort held every vertex at its start.
+    pub frozen: bool,
+}
+
+impl SelfContactReport {
+    /// Adds `other` to these counts.
+    pub fn add(&mut self, other: &SelfContactReport) {
+        self.proximity += other.proximity;
+        self.impacts += other.impacts;
+        self.zone_rounds += other.zone_rounds;
+        self.frozen |= other.frozen;
+    }
+}
+
+/// A pair of primitives as four vertices and weights: the pair's relative position (or
+/// velocity) is `Σ weights[k] x[vertices[k]]`, pointing from the second side to the first.
+#[derive(Debug, Clone, Copy)]
+struct Stencil {
+    vertices: [u32; 4],
+    weights: [f32; 4],
+}
+
+impl Stencil {
+    fn point_triangle(p: u32, tri: [u32; 3], w: [f32; 3]) -> Stencil {
+        Stencil { vertices: [p, tri[0], tri[1], tri[2]], weights: [1.0, -w[0], -w[1], -w[2]] }
+    }
+
+    fn edge_edge(e: [u32; 2], f: [u32; 2], s: f32, u: f32) -> Stencil {
+        Stencil { vertices: [e[0], e[1], f[0], f[1]], weights: [1.0 - s, s, u - 1.0, -u] }
+    }
+
+    fn relative(&self, x: &[Vec3]) -> Vec3 {
+        (0..4).map(|k| self.weights[k] * x[self.vertices[k] as usize]).sum()
+    }
+}
+
+/// A pair that needs an impulse: along `normal`, their relative velocity must reach
+/// `target` [m/s].
+#[derive(Debug, Clone, Copy)]
+struct Contact {
+    stencil: Stencil,
+    normal: Vec3,
+    target: f32,
+    friction: f32,
+}
+
+/// A candidate pair of primitives.
+#[derive(Debug, Clone, Copy)]
+enum Pair {
+    /// A vertex and a triangle (index).
+    PointTriangle(u32, u32),
+    /// Two edges (indices).
+    EdgeEdge(u32, u32),
+}
+
+/// The trees and scratch space kept from step to step.
+#[derive(Debug, Default)]
+pub struct SelfContactSolver {
+    triangle_tree: Bvh,
+    edge_tree: Bvh,
+    triangle_boxes: Vec<Aabb>,
+    edge_boxes: Vec<Aabb>,
+    /// Mean velocity of each vertex over the step, as the contacts change it.
+    mean_velocity: Vec<Vec3>,
+    /// Zone of each vertex (a union-find forest), for impact zones.
+    zone: Vec<u32>,
+}
+
+impl SelfContactSolver {
+    /// Makes the step from `x0` to `x1` (length `h`) free of crossings of `mesh` with
+    /// itself, moving `x1` and changing the end velocities `v` by what the contacts
+    /// changed the step's mean velocity.
+    pub fn resolve(
+        &mut self,
+        mesh: &ContactMesh,
+        h: f32,
+        x0: &[Vec3],
+        x1: &mut [Vec3],
+        v: &mut [Vec3],
+    ) -> SelfContactReport {
+        let mut report = SelfContactReport::default();
+        if mesh.triangles.is_empty() || h <= 0.0 {
+            return report;
+        }
+        self.mean_velocity.clear();
+        self.mean_velocity.extend(x0.iter().zip(x1.iter()).map(|(a, b)| (*b - *a) / h));
+        let before = self.mean_velocity.clone();
+
+        // 1. Proximity at the start of the step.
+        let pairs = self.candidates(mesh, x0, x1);
+        let contacts: Vec<Contact> =
+            pairs.par_iter().with_min_len(PARALLEL_MIN_LEN).filter_map(|&pair| proximity(mesh, pair, h, x0)).collect();
+        report.proximity = contacts.len() as u32;
+        for contact in &contacts {
+            apply(contact, &mesh.inv_mass, &mut self.mean_velocity);
+        }
+        advance(x0, &self.mean_velocity, h, x1);
+
+        // 2. Continuous collision, pass after pass. The proximity candidates still cover
+        // the sweeps if proximity moved no end point by more than half the margin.
+        let margin = self.margin(mesh);
+        let moved =
+            x1.iter().zip(&before).zip(x0).fold(0.0f32, |m, ((x1, v), x0)| m.max((*x1 - (*x0 + h * *v)).length()));
+        let mut pairs = if moved < 0.5 * margin { Some(pairs) } else { None };
+        let mut remaining = true;
+        for _ in 0..IMPACT_PASSES {
+            let pairs = match pairs.take() {
+                Some(pairs) => pairs,
+                None => self.candidates(mesh, x0, x1),
+            };
+            let hits = impacts(mesh, &pairs, h, x0, x1);
+            if hits.is_empty() {
+                remaining = false;
+                break;
+            }
+            for &pair in &hits {
+                // Earlier impulses of this pass may have resolved or changed it.
+                if let Some(contact) = impact(mesh, pair, h, x0, x1) {
+                    report.impacts += 1;
+                    apply(&contact, &mesh.inv_mass, &mut self.mean_velocity);
+                    for &k in &contact.stencil.vertices {
+                        let k = k as usize;
+                        x1[k] = x0[k] + h * self.mean_velocity[k];
+                    }
+                }
+            }
+        }
+
+        // 3. Impact zones for whatever is left.
+        if remaining {
+            self.zone.clear();
+            self.zone.extend(0..mesh.len() as u32);
+            loop {
+                let pairs = self.candidates(mesh, x0, x1);
+                let hits = impacts(mesh, &pairs, h, x0, x1);
+                if hits.is_empty() {
+                    break;
+                }
+                if report.zone_rounds == ZONE_ROUNDS {
+                    for (k, w) in mesh.inv_mass.iter().enumerate() {
+                        if *w > 0.0 {
+                            self.mean_velocity[k] = Vec3::ZERO;
+                        }
+                    }
+                    advance(x0, &self.mean_velocity, h, x1);
+                    report.frozen = true;
+                    break;
+                }
+                report.zone_rounds += 1;
+                for pair in hits {
+                    let vertices = pair_vertices(mesh, pair);
+                    for k in &vertices[1..] {
+                        union(&mut self.zone, vertices[0], *k);
+                    }
+                }
+                self.move_zones_rigidly(mesh, h, x0);
+                advance(x0, &self.mean_velocity, h, x1);
+            }
+        }
+
+        for k in 0..mesh.len() {
+            if mesh.inv_mass[k] > 0.0 {
+                v[k] += self.mean_velocity[k] - before[k];
+            }
+        }
+        report
+    }
+
+    /// How much the trees' boxes are grown: the largest separation of a pair.
+    fn margin(&self, mesh: &ContactMesh) -> f32 {
+        2.0 * mesh.half_gap.iter().fold(0.0f32, |m, g| m.max(*g))
+    }
+
+    /// Refits the trees to the boxes swept from `x0` to `x1` (grown by the largest
+    /// separation) and lists the point–triangle and edge–edge pairs whose boxes meet,
+    /// leaving out pairs that share a vertex.
+    fn candidates(&mut self, mesh: &ContactMesh, x0: &[Vec3], x1: &[Vec3]) -> Vec<Pair> {
+        let margin = self.margin(mesh);
+        let swept = |vertices: &[u32]| Aabb::around(vertices.iter().flat_map(|&k| [x0[k as usize], x1[k as usize]]));
+        mesh.triangles.par_iter().map(|t| swept(t).inflated(margin)).collect_into_vec(&mut self.triangle_boxes);
+        mesh.edges.par_iter().map(|e| swept(e).inflated(margin)).collect_into_vec(&mut self.edge_boxes);
+        self.triangle_tree.refit(&self.triangle_boxes);
+        self.edge_tree.refit(&self.edge_boxes);
+        let (triangle_tree, edge_tree) = (&self.triangle_tree, &self.edge_tree);
+        let point_pairs = (0..mesh.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).flat_map_iter(|p| {
+            let mut found = Vec::new();
+            triangle_tree.query(&swept(&[p]), |t| {
+                if !mesh.triangles[t as usize].contains(&p) {
+                    found.push(Pair::PointTriangle(p, t));
+                }
+            });
+            found.sort_unstable_by_key(|pair| match pair {
+                Pair::PointTriangle(_, t) | Pair::EdgeEdge(_, t) => *t,
+            });
+            found
+        });
+        let edge_boxes = &self.edge_boxes;
+        let edge_pairs =
+            (0..mesh.edges.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).flat_map_iter(|e| {
+                let mut found = Vec::new();
+                let [a, b] = mesh.edges[e as usize];
+                edge_tree.query(&edge_boxes[e as usize], |f| {
+                    let [c, d] = mesh.edges[f as usize];
+                    if f > e && a != c && a != d && b != c && b != d {
+                        found.push(f);
+                    }
+                });
+                found.sort_unstable();
+                found.into_iter().map(move |f| Pair::EdgeEdge(e, f))
+            });
+        point_pairs.chain(edge_pairs).collect()
+    }
+
+    /// Gives every zone of two or more vertices one rigid motion for the step: the
+    /// translation and rotation that keep its linear and angular momentum. A zone
+    /// holding a pinned vertex moves with its pins' mean motion instead.
+    fn move_zones_rigidly(&mut self, mesh: &ContactMesh, h: f32, x0: &[Vec3]) {
+        let mut zones: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
+        for k in 0..mesh.len() as u32 {
+            let root = find(&mut self.zone, k);
+            zones.entry(root).or_default().push(k);
+        }
+        for members in zones.into_values().filter(|m| m.len() > 1) {
+            let vel = &mut self.mean_velocity;
+            let pinned: Vec<u32> = members.iter().copied().filter(|&k| mesh.inv_mass[k as usize] == 0.0).collect();
+            if !pinned.is_empty() {
+                let mean = pinned.iter().map(|&k| vel[k as usize]).sum::<Vec3>() / pinned.len() as f32;
+                for &k in &members {
+                    if mesh.inv_mass[k as usize] > 0.0 {
+                        vel[k as usize] = mean;
+                    }
+                }
+                continue;
+            }
+            let mass = |k: u32| 1.0 / mesh.inv_mass[k as usize];
+            let total: f32 = members.iter().map(|&k| mass(k)).sum();
+            let centre = members.iter().map(|&k| mass(k) * x0[k as usize]).sum::<Vec3>() / total;
+            let velocity = members.iter().map(|&k| mass(k) * vel[k as usize]).sum::<Vec3>() / total;
+            let mut momentum = Vec3::ZERO;
+            let mut inertia = glam::Mat3::ZERO;
+            for &k in &members {
+                let r = x0[k as usize] - centre;
+                momentum += mass(k) * r.cross(vel[k as usize] - velocity);
+                inertia += mass(k) * (glam::Mat3::from_diagonal(Vec3::splat(r.length_squared())) - outer(r, r));
+            }
+            // A zone on a line has no inertia about it: regularise by a trace fraction.
+            let trace = inertia.x_axis.x + inertia.y_axis.y + inertia.z_axis.z;
+            let regular = inertia + glam::Mat3::from_diagonal(Vec3::splat(1e-6 * trace + f32::MIN_POSITIVE));
+            let omega = regular.inverse() * momentum;
+            let turn = Quat::from_scaled_axis(h * omega);
+            for &k in &members {
+                let r = x0[k as usize] - centre;
+                let end = centre + h * velocity + turn * r;
+                vel[k as usize] = (end - x0[k as usize]) / h;
+            }
+        }
+    }
+}
+
+fn outer(a: Vec3, b: Vec3) -> glam::Mat3 {
+    glam::Mat3::from_cols(a * b.x, a * b.y, a * b.z)
+}
+
+fn find(parent: &mut [u32], mut k: u32) -> u32 {
+    while parent[k as usize] != k {
+        let up = parent[parent[k as usize] as usize];
+        parent[k as usize] = up;
+        k = up;
+    }
+    k
+}
+
+fn union(parent: &mut [u32], a: u32, b: u32) {
+    let (ra, rb) = (find(parent, a), find(parent, b));
+    // The smaller index becomes the root, so zones do not depend on merge order.
+    if ra != rb {
+        parent[ra.max(rb) as usize] = ra.min(rb);
+    }
+}
+
+fn advance(x0: &[Vec3], mean_velocity: &[Vec3], h: f32, x1: &mut [Vec3]) {
+    x1.par_iter_mut().zip(x0).zip(mean_velocity).with_min_len(PARALLEL_MIN_LEN).for_each(|((x1, x0), v)| {
+        *x1 = *x0 + h * *v;
+    });
+}
+
+/// The four vertices of a pair.
+fn pair_vertices(mesh: &ContactMesh, pair: Pair) -> [u32; 4] {
+    match pair {
+        Pair::PointTriangle(p, t) => {
+            let [a, b, c] = mesh.triangles[t as usize];
+            [p, a, b, c]
+        }
+        Pair::EdgeEdge(e, f) => {
+            let ([a, b], [c, d]) = (mesh.edges[e as usize], mesh.edges[f as usize]);
+            [a, b, c, d]
+        }
+    }
+}
+
+/// Separation δ and friction μ of a pair: sums of the sides' half gaps, mean friction.
+fn pair_gap_and_friction(mesh: &ContactMesh, vertices: [u32; 4], first_side: usize) -> (f32, f32) {
+    let side = |range: std::ops::Range<usize>| {
+        let n = range.len() as f32;
+        let (gap, mu) = range.fold((0.0, 0.0), |(g, m), k| {
+            let v = vertices[k] as usize;
+            (g + mesh.half_gap[v], m + mesh.friction[v])
+        });
+        (gap / n, mu / n)
+    };
+    let (g1, m1) = side(0..first_side);
+    let (g2, m2) = side(first_side..4);
+    (g1 + g2, 0.5 * (m1 + m2))
+}
+
+/// The proximity contact of a pair at the start of the step, if it is closer than its
+/// separation: the impulse will make its normal velocity restore [`GAP_RECOVERY`] of the
+/// missing gap over the step.
+fn proximity(mesh: &ContactMesh, pair: Pair, h: f32, x0: &[Vec3]) -> Option<Contact> {
+    let vertices = pair_vertices(mesh, pair);
+    let [p, a, b, c] = vertices.map(|k| x0[k as usize]);
+    let (stencil, first_side, fallback) = match pair {
+        Pair::PointTriangle(_, t) => {
+            let w = closest_on_triangle(p, a, b, c);
+            let tri = mesh.triangles[t as usize];
+            (Stencil::point_triangle(vertices[0], tri, w), 1, (b - a).cross(c - a))
+        }
+        Pair::EdgeEdge(e, f) => {
+            let (s, u) = closest_between_segments(p, a, b, c);
+            (Stencil::edge_edge(mesh.edges[e as usize], mesh.edges[f as usize], s, u), 2, (a - p).cross(c - b))
+        }
+    };
+    let (gap, friction) = pair_gap_and_friction(mesh, vertices, first_side);
+    let offset = stencil.relative(x0);
+    let distance = offset.length();
+    if distance >= gap {
+        return None;
+    }
+    let normal = if distance > 1e-6 * gap {
+        offset / distance
+    } else {
+        let n = fallback.try_normalize()?;
+        if n.dot(offset) < 0.0 { -n } else { n }
+    };
+    Some(Contact { stencil, normal, target: GAP_RECOVERY * (gap - distance) / h, friction })
+}
+
+/// Pairs whose paths from `x0` to `x1` touch, found in parallel.
+fn impacts(mesh: &ContactMesh, pairs: &[Pair], h: f32, x0: &[Vec3], x1: &[Vec3]) -> Vec<Pair> {
+    pairs
+        .par_iter()
+        .with_min_len(PARALLEL_MIN_LEN)
+        .copied()
+        .filter(|&pair| impact(mesh, pair, h, x0, x1).is_some())
+        .collect()
+}
+
+/// The continuous collision of a pair between `x0` and `x1`, if their paths touch: the
+/// impulse will leave them [`IMPACT_GAP`] δ apart along the normal at the end of the
+/// step.
+fn impact(mesh: &ContactMesh, pair: Pair, h: f32, x0: &[Vec3], x1: &[Vec3]) -> Option<Contact> {
+    let vertices = pair_vertices(mesh, pair);
+    let sweep = Sweep { start: vertices.map(|k| x0[k as usize]), end: vertices.map(|k| x1[k as usize]) };
+    let first_side = if matches!(pair, Pair::PointTriangle(..)) { 1 } else { 2 };
+    let (gap, friction) = pair_gap_and_friction(mesh, vertices, first_side);
+    let tolerance = (1e-3 * gap).max(1e-7);
+    let (stencil, normal_at_hit) = match pair {
+        Pair::PointTriangle(p, tri) => {
+            let (t, w) = sweep.point_triangle_hit(tolerance)?;
+            let [_, a, b, c] = lerp4(&sweep, t);
+            (Stencil::point_triangle(p, mesh.triangles[tri as usize], w), (b - a).cross(c - a))
+        }
+        Pair::EdgeEdge(e, f) => {
+            let (t, (s, u)) = sweep.edge_edge_hit(tolerance)?;
+            let [p0, p1, q0, q1] = lerp4(&sweep, t);
+            (Stencil::edge_edge(mesh.edges[e as usize], mesh.edges[f as usize], s, u), (p1 - p0).cross(q1 - q0))
+        }
+    };
+    let start = stencil.relative(x0);
+    let end = stencil.relative(x1);
+    let mut normal =
+        normal_at_hit.try_normalize().or_else(|| start.try_normalize()).or_else(|| (start - end).try_normalize())?;
+    // The normal points to the side the first primitive started on (or, starting in
+    // contact, to the side it came from).
+    let side = if start.dot(normal).abs() > 1e-3 * tolerance { start.dot(normal) } else { (start - end).dot(normal) };
+    if side < 0.0 {
+        normal = -normal;
+    }
+    let start_gap = start.dot(normal);
+    Some(Contact { stencil, normal, target: (IMPACT_GAP * gap - start_gap) / h, friction })
+}
+
+fn lerp4(sweep: &Sweep, t: f32) -> [Vec3; 4] {
+    std::array::from_fn(|k| sweep.start[k].lerp(sweep.end[k], t))
+}
+
+/// Applies the impulse of `contact` to the mean velocities: the pair's normal velocity
+/// rises to the target (if below it) and friction takes at most μ times that change off
+/// its tangential velocity (all of it if that suffices: static friction). The change is
+/// shared by the vertices in proportion to weight × inverse mass.
+fn apply(contact: &Contact, inv_mass: &[f32], velocity: &mut [Vec3]) {
+    let Stencil { vertices, weights } = contact.stencil;
+    let relative = contact.stencil.relative(velocity);
+    let normal_speed = relative.dot(contact.normal);
+    if normal_speed >= contact.target {
+        return;
+    }
+    let share: f32 = (0..4).map(|k| weights[k] * weights[k] * inv_mass[vertices[k] as usize]).sum();
+    if share <= 0.0 {
+        return;
+    }
+    let normal_change = contact.target - normal_speed;
+    let tangential = relative - normal_speed * contact.normal;
+    let speed = tangential.length();
+    let friction_change = if speed <= contact.friction * normal_change {
+        -tangential
+    } else {
+        -tangential * (contact.friction * normal_change / speed)
+    };
+    let change = normal_change * contact.normal + friction_change;
+    for k in 0..4 {
+        let vertex = vertices[k] as usize;
+        velocity[vertex] += (weights[k] * inv_mass[vertex] / share) * change;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collision::intersection::count_self_intersections;
+
+    /// Two unit squares of two triangles each, the second `height` above the first.
+    fn two_sheets(height: f32) -> (ContactMesh, Vec<Vec3>) {
+        let square =
+            |y: f32| [Vec3::new(0.0, y, 0.0), Vec3::new(1.0, y, 0.0), Vec3::new(1.0, y, 1.0), Vec3::new(0.0, y, 1.0)];
+        let x: Vec<Vec3> = square(0.0).into_iter().chain(square(height)).collect();
+        let triangles = vec![[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]];
+        let mesh = ContactMesh {
+            edges: ContactMesh::edges_of(&triangles),
+            triangles,
+            inv_mass: vec![1.0; 8],
+            half_gap: vec![0.005; 8],
+            friction: vec![0.0; 8],
+        };
+        (mesh, x)
+    }
+
+    #[test]
+    fn a_sheet_dropped_through_another_in_one_step_is_stopped_and_momentum_is_kept() {
+        let (mesh, x0) = two_sheets(0.1);
+        let h = 0.01;
+        // The upper sheet falls at 20 m/s: 0.2 m in the step, through the lower one.
+        let mut v: Vec<Vec3> = (0..8).map(|k| if k >= 4 { Vec3::new(0.0, -20.0, 0.0) } else { Vec3::ZERO }).collect();
+        let mut x1: Vec<Vec3> = x0.iter().zip(&v).map(|(x, v)| *x + h * *v).collect();
+        let momentum: Vec3 = v.iter().sum();
+        let report = SelfContactSolver::default().resolve(&mesh, h, &x0, &mut x1, &mut v);
+        assert!(report.impacts > 0 || report.zone_rounds > 0, "{report:?}");
+        // The sheets meet within the step and end it a tenth of their separation apart
+        // (Zheng eq. 3.23), the impulse shared equally by the equal masses.
+        for k in 0..4 {
+            let gap = x1[k + 4].y - x1[k].y;
+            assert!((gap - IMPACT_GAP * 0.01).abs() < 2e-4, "gap {gap}");
+        }
+        assert!((v.iter().sum::<Vec3>() - momentum).length() < 1e-3, "impulses conserve momentum");
+        assert!((v[0].y + 5.05).abs() < 0.05 && (v[4].y + 14.95).abs() < 0.05, "{v:?}");
+    }
+
+    #[test]
+    fn a_sheet_resting_closer_than_the_separation_is_pushed_apart_only_by_the_recovery() {
+        let (mesh, x0) = two_sheets(0.004);
+        let h = 0.01;
+        let mut v = vec![Vec3::ZERO; 8];
+        let mut x1 = x0.clone();
+        let report = SelfContactSolver::default().resolve(&mesh, h, &x0, &mut x1, &mut v);
+        assert!(report.proximity > 0);
+        // Gap 4 mm of 10 mm: the pair's normal velocity becomes 0.25 × 6 mm / h.
+        let relative = v[4].y - v[0].y;
+        assert!((relative - GAP_RECOVERY * 0.006 / h).abs() < 1e-3, "relative {relative}");
+    }
+
+    #[test]
+    fn friction_stops_a_slow_sliding_contact_and_slows_a_fast_one() {
+        for slide in [0.05, 1.0] {
+            let (mut mesh, x0) = two_sheets(0.008);
+            mesh.friction = vec![0.5; 8];
+            mesh.inv_mass[..4].fill(0.0);
+            let h = 0.01;
+            // The upper sheet slides along x and approaches the pinned lower one at 0.5 m/s.
+            let mut v: Vec<Vec3> =
+                (0..8).map(|k| if k >= 4 { Vec3::new(slide, -0.5, 0.0) } else { Vec3::ZERO }).collect();
+            let mut x1: Vec<Vec3> = x0.iter().zip(&v).map(|(x, v)| *x + h * *v).collect();
+            SelfContactSolver::default().resolve(&mesh, h, &x0, &mut x1, &mut v);
+            assert!(v[4].y > -1e-6, "approach stopped: {}", v[4].y);
+            if slide < 0.1 {
+                assert!(v[4].x.abs() < 1e-6, "sticks: {}", v[4].x);
+            } else {
+                assert!(v[4].x > 0.2 && v[4].x < slide - 0.2, "slides, slower: {}", v[4].x);
+            }
+        }
+    }
+
+    #[test]
+    fn impact_zones_keep_a_crumpling_sheet_untangled() {
+        // A 12 × 12 grid sheet whose vertices get large random velocities: impulses alone
+        // cannot sort it out in a step, the zones must.
+        let n = 12;
+        let mut x0 = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                x0.push(Vec3::new(i as f32 * 0.02, 0.0, j as f32 * 0.02));
+            }
+        }
+        let mut triangles = Vec::new();
+        for j in 0..n - 1 {
+            for i in 0..n - 1 {
+                let k = (j * n + i) as u32;
+                triangles.push([k, k + 1, k + 1 + n as u32]);
+                triangles.push([k, k + 1 + n as u32, k + n as u32]);
+            }
+        }
+        let mesh = ContactMesh {
+            edges: ContactMesh::edges_of(&triangles),
+            inv_mass: vec![1.0; x0.len()],
+            half_gap: vec![0.0005; x0.len()],
+            friction: vec![0.2; x0.len()],
+            triangles,
+        };
+        let mut v: Vec<Vec3> = (0..x0.len())
+            .map(|k| {
+                let s = k as f32;
+                Vec3::new((s * 1.7).sin(), (s * 2.3).sin() * 3.0, (s * 0.9).cos()) * 2.0
+            })
+            .collect();
+        let h = 0.01;
+        let mut x1: Vec<Vec3> = x0.iter().zip(&v).map(|(x, v)| *x + h * *v).collect();
+        assert!(count_self_intersections(&x1, &mesh.triangles) > 0, "the unresolved step tangles");
+        let report = SelfContactSolver::default().resolve(&mesh, h, &x0, &mut x1, &mut v);
+        assert_eq!(count_self_intersections(&x1, &mesh.triangles), 0, "{report:?}");
+    }
+}
