@@ -2,11 +2,27 @@
 
 use bevy_ecs::prelude::*;
 
-use crate::components::{ClothTopology, Particles, Pins, SolverWorkspace, StrainLimit};
-use crate::resources::StepSettings;
+use crate::components::{ClothTopology, Grips, Particles, Pins, SolverWorkspace, StrainLimit};
+use crate::resources::{SimClock, StepSettings};
 use crate::schedule::{SimSchedules, SubstepSystems};
 use crate::solver::pins::hold_pins;
 use crate::solver::strain_limit::{LimitedEdges, limit_strain};
+
+/// Moves the pin targets of gripped particles to where their grips are at the end of the
+/// step. Only targets change, so the cloth's topology is not rebuilt. Runs in
+/// [`SubstepSystems::Constraints`], before the pins are held.
+pub fn move_grips(clock: Res<SimClock>, settings: Res<StepSettings>, mut cloths: Query<(&mut Pins, &Grips)>) {
+    let t = (clock.time_s + f64::from(settings.dt)) as f32;
+    for (mut pins, grips) in &mut cloths {
+        let pins = pins.bypass_change_detection();
+        for grip in &grips.0 {
+            let pose = grip.motion.state_at(t).pose;
+            for (&particle, &local) in grip.particles.iter().zip(&grip.local) {
+                pins.insert(particle, pose * local);
+            }
+        }
+    }
+}
 
 /// Puts pinned particles back on their targets at rest. Runs in
 /// [`SubstepSystems::Constraints`].
@@ -40,7 +56,7 @@ pub fn limit_cloth_strain(
 
 /// Adds this module's systems.
 pub fn add_to(schedules: &mut SimSchedules) {
-    schedules
-        .substep
-        .add_systems((hold_pinned_particles, limit_cloth_strain).chain().in_set(SubstepSystems::Constraints));
+    schedules.substep.add_systems(
+        (move_grips, hold_pinned_particles, limit_cloth_strain).chain().in_set(SubstepSystems::Constraints),
+    );
 }

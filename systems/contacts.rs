@@ -69,7 +69,15 @@ pub fn collide_with_bodies(
 pub fn collide_cloths(
     settings: Res<StepSettings>,
     mut contacts: ResMut<ClothContacts>,
-    mut cloths: Query<(Entity, &mut Particles, &Triangles, &ClothTopology, &SolverWorkspace, &SelfCollision)>,
+    mut cloths: Query<(
+        Entity,
+        &mut Particles,
+        &Triangles,
+        &ClothTopology,
+        &SolverWorkspace,
+        &Touching,
+        &SelfCollision,
+    )>,
 ) {
     let contacts = &mut *contacts;
     let mut members = Vec::new();
@@ -83,10 +91,9 @@ pub fn collide_cloths(
     }
     if members != contacts.members {
         let mut mesh = ContactMesh::default();
-        for (_, particles, triangles, topology, _, collision) in &cloths {
-            let offset = mesh.len() as u32;
+        for (_, particles, triangles, _, _, _, collision) in &cloths {
+            let offset = mesh.half_gap.len() as u32;
             mesh.triangles.extend(triangles.indices.iter().map(|t| t.map(|k| k + offset)));
-            mesh.inv_mass.extend_from_slice(&topology.free_inv_mass);
             mesh.half_gap.extend(std::iter::repeat_n(0.5 * collision.separation, particles.len()));
             mesh.friction.extend(std::iter::repeat_n(collision.friction, particles.len()));
         }
@@ -98,7 +105,17 @@ pub fn collide_cloths(
     start.clear();
     end.clear();
     velocity.clear();
-    for (_, particles, _, _, workspace, _) in &cloths {
+    mesh.inv_mass.clear();
+    mesh.impulse_inv_mass.clear();
+    for (_, particles, _, topology, workspace, touching, _) in &cloths {
+        // Particles resting on a body are infinitely heavy to impulses: cloth falling on
+        // them must not push them into the body.
+        let offset = mesh.inv_mass.len();
+        mesh.inv_mass.extend_from_slice(&topology.free_inv_mass);
+        mesh.impulse_inv_mass.extend_from_slice(&topology.free_inv_mass);
+        for touch in &touching.0 {
+            mesh.impulse_inv_mass[offset + touch.particle as usize] = 0.0;
+        }
         start.extend_from_slice(&workspace.step_start);
         end.extend_from_slice(&particles.position);
         velocity.extend_from_slice(&particles.velocity);

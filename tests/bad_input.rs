@@ -109,3 +109,19 @@ fn an_edit_of_an_unknown_cloth_is_refused() {
         error("    ],\n)", "    ],\n    edits: [(at_s: 1.0, cloth: \"shet\", action: Unpin([Indices([0])]))],\n)");
     assert_mentions(&message, &["scenes/broken.ron:13:25", "edits[0].cloth", "no cloth is named `shet`"]);
 }
+
+#[test]
+fn a_self_collision_separation_as_large_as_the_cells_is_refused_with_the_edge_length() {
+    // The 8 × 8 grid over 1 m has edges of 1/7 m; half of that is the largest separation.
+    let message = error("pins: [Indices([0, 7])],", "pins: [Indices([0, 7])], self_collision: (separation: 0.1),");
+    assert_mentions(&message, &["cloths[0].self_collision.separation", "shortest edge", "0.142"]);
+    let message = error("pins: [Indices([0, 7])],", "pins: [Indices([0, 7])], self_collision: (friction: -0.1),");
+    assert_mentions(&message, &["cloths[0].self_collision.friction"]);
+}
+
+#[test]
+fn grip_keyframes_out_of_order_are_refused() {
+    let grip = "grips: [(particles: [Indices([0])], keyframes: [(1.0, ()), (0.5, ())])],";
+    let message = error("pins: [Indices([0, 7])],", grip);
+    assert_mentions(&message, &["cloths[0].grips[0].keyframes", "increase"]);
+}

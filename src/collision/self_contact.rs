@@ -34,8 +34,12 @@ pub struct ContactMesh {
     pub triangles: Vec<[u32; 3]>,
     /// Edges of the triangles, each once, smaller vertex first.
     pub edges: Vec<[u32; 2]>,
-    /// Inverse masses, zero for pinned vertices [1/kg].
+    /// Inverse masses, zero for pinned vertices [1/kg]: what impact zones weigh.
     pub inv_mass: Vec<f32>,
+    /// Inverse masses for impulses: also zero for vertices that impulses should not move,
+    /// such as those resting on a body (so that cloth falling on them does not push
+    /// them into it) [1/kg].
+    pub impulse_inv_mass: Vec<f32>,
     /// Half the separation each vertex keeps from other cloth [m]: a pair keeps the sum of
     /// its two sides' halves.
     pub half_gap: Vec<f32>,
@@ -58,12 +62,12 @@ impl ContactMesh {
 
     /// Number of vertices.
     pub fn len(&self) -> usize {
-        self.inv_mass.len()
+        self.half_gap.len()
     }
 
     /// Whether the mesh has no vertex.
     pub fn is_empty(&self) -> bool {
-        self.inv_mass.is_empty()
+        self.half_gap.is_empty()
     }
 }
 
@@ -179,7 +183,7 @@ impl SelfContactSolver {
             pairs.par_iter().with_min_len(PARALLEL_MIN_LEN).filter_map(|&pair| proximity(mesh, pair, h, x0)).collect();
         report.proximity = contacts.len() as u32;
         for contact in &contacts {
-            apply(contact, &mesh.inv_mass, &mut self.mean_velocity);
+            apply(contact, mesh, &mut self.mean_velocity);
         }
         advance(x0, &self.mean_velocity, h, x1);
 
@@ -204,7 +208,7 @@ impl SelfContactSolver {
                 // Earlier impulses of this pass may have resolved or changed it.
                 if let Some(contact) = impact(mesh, pair, h, x0, x1) {
                     report.impacts += 1;
-                    apply(&contact, &mesh.inv_mass, &mut self.mean_velocity);
+                    apply(&contact, mesh, &mut self.mean_velocity);
                     for &k in &contact.stencil.vertices {
                         let k = k as usize;
                         x1[k] = x0[k] + h * self.mean_velocity[k];
@@ -300,7 +304,8 @@ impl SelfContactSolver {
 
     /// Gives every zone of two or more vertices one rigid motion for the step: the
     /// translation and rotation that keep its linear and angular momentum. A zone
-    /// holding a pinned vertex moves with its pins' mean motion instead.
+    /// holding a vertex impulses may not move (pinned, or resting on a body) translates
+    /// with those vertices' mean motion instead, so zones never push cloth into a body.
     fn move_zones_rigidly(&mut self, mesh: &ContactMesh, h: f32, x0: &[Vec3]) {
         let mut zones: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
         for k in 0..mesh.len() as u32 {
@@ -309,7 +314,8 @@ impl SelfContactSolver {
         }
         for members in zones.into_values().filter(|m| m.len() > 1) {
             let vel = &mut self.mean_velocity;
-            let pinned: Vec<u32> = members.iter().copied().filter(|&k| mesh.inv_mass[k as usize] == 0.0).collect();
+            let pinned: Vec<u32> =
+                members.iter().copied().filter(|&k| mesh.impulse_inv_mass[k as usize] == 0.0).collect();
             if !pinned.is_empty() {
                 let mean = pinned.iter().map(|&k| vel[k as usize]).sum::<Vec3>() / pinned.len() as f32;
                 for &k in &members {
@@ -484,15 +490,21 @@ fn lerp4(sweep: &Sweep, t: f32) -> [Vec3; 4] {
 /// Applies the impulse of `contact` to the mean velocities: the pair's normal velocity
 /// rises to the target (if below it) and friction takes at most μ times that change off
 /// its tangential velocity (all of it if that suffices: static friction). The change is
-/// shared by the vertices in proportion to weight × inverse mass.
-fn apply(contact: &Contact, inv_mass: &[f32], velocity: &mut [Vec3]) {
+/// shared by the vertices in proportion to weight × inverse mass: the impulse masses,
+/// unless the vertices those hold still carry most of the pair's weight (moving the
+/// contact point would then fling a lightly weighted vertex), in which case the true
+/// masses.
+fn apply(contact: &Contact, mesh: &ContactMesh, velocity: &mut [Vec3]) {
     let Stencil { vertices, weights } = contact.stencil;
     let relative = contact.stencil.relative(velocity);
     let normal_speed = relative.dot(contact.normal);
     if normal_speed >= contact.target {
         return;
     }
-    let share: f32 = (0..4).map(|k| weights[k] * weights[k] * inv_mass[vertices[k] as usize]).sum();
+    let share_of =
+        |inv_mass: &[f32]| -> f32 { (0..4).map(|k| weights[k] * weights[k] * inv_mass[vertices[k] as usize]).sum() };
+    let (held, free) = (share_of(&mesh.impulse_inv_mass), share_of(&mesh.inv_mass));
+    let (inv_mass, share) = if held >= 0.25 * free { (&mesh.impulse_inv_mass, held) } else { (&mesh.inv_mass, free) };
     if share <= 0.0 {
         return;
     }
@@ -526,6 +538,7 @@ mod tests {
             edges: ContactMesh::edges_of(&triangles),
             triangles,
             inv_mass: vec![1.0; 8],
+            impulse_inv_mass: vec![1.0; 8],
             half_gap: vec![0.005; 8],
             friction: vec![0.0; 8],
         };
@@ -571,6 +584,7 @@ mod tests {
             let (mut mesh, x0) = two_sheets(0.008);
             mesh.friction = vec![0.5; 8];
             mesh.inv_mass[..4].fill(0.0);
+            mesh.impulse_inv_mass[..4].fill(0.0);
             let h = 0.01;
             // The upper sheet slides along x and approaches the pinned lower one at 0.5 m/s.
             let mut v: Vec<Vec3> =
@@ -608,6 +622,7 @@ mod tests {
         let mesh = ContactMesh {
             edges: ContactMesh::edges_of(&triangles),
             inv_mass: vec![1.0; x0.len()],
+            impulse_inv_mass: vec![1.0; x0.len()],
             half_gap: vec![0.0005; x0.len()],
             friction: vec![0.2; x0.len()],
             triangles,

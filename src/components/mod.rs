@@ -16,7 +16,7 @@ pub use cloth::{BendingDesc, BendingLawDesc, Cloth, ClothMaterial, MembraneDesc,
 pub use collider::{Collider, ContactStats, SelfCollision, Touching};
 pub use elements::{BendingHinges, MembraneTriangles, StrainLimit};
 pub use particles::Particles;
-pub use pins::Pins;
+pub use pins::{Grip, Grips, Pins};
 pub use springs::{SpringKind, Springs};
 pub use topology::{ClothTopology, Csr, RenderMesh, SolverWorkspace};
 pub use triangles::Triangles;

@@ -3,6 +3,8 @@
 use bevy_ecs::prelude::*;
 use glam::Vec3;
 
+use crate::collision::collider::ColliderMotion;
+
 /// Particles held at fixed targets. A pin added holds its particle from the next step on;
 /// a pin removed releases it. Kept sorted by particle so results never depend on the order
 /// pins were added in.
@@ -53,3 +55,18 @@ impl Pins {
         self.particles.is_empty()
     }
 }
+
+/// Pinned particles carried rigidly along a motion: a clamp or a hand.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Grip {
+    /// The held particles (all of them also in [`Pins`]).
+    pub particles: Vec<u32>,
+    /// Each particle's place in the grip's frame [m].
+    pub local: Vec<Vec3>,
+    /// Where the grip is over time.
+    pub motion: ColliderMotion,
+}
+
+/// The grips of a cloth; each step moves their particles' pin targets.
+#[derive(Component, Debug, Clone, Default, PartialEq)]
+pub struct Grips(pub Vec<Grip>);

@@ -17,8 +17,8 @@ use crate::builders::surface::limited_edges;
 use crate::builders::tear::Cut;
 use crate::collision::collider::{ColliderMotion, ColliderShape, Pose};
 use crate::components::{
-    Cloth, ClothTopology, Collider, ContactStats, Pins, RenderMesh, SelfCollision, SolverWorkspace, StrainLimit,
-    Touching, UserForces,
+    Cloth, ClothTopology, Collider, ContactStats, Grip, Grips, Pins, RenderMesh, SelfCollision, SolverWorkspace,
+    StrainLimit, Touching, UserForces,
 };
 use crate::resources::{
     AirSettings, ClothContacts, DivergenceLimit, EditAction, Gravity, HealthReport, IntegratorStats, ProbeRequests,
@@ -144,6 +144,24 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
                 pins.insert(particle, data.particles.position[particle as usize]);
             }
         }
+        let mut grips = Vec::with_capacity(desc.grips.len());
+        for (k, grip) in desc.grips.iter().enumerate() {
+            let motion = ColliderMotion::Keyframes(grip.keyframes.clone());
+            let frame = grip.keyframes[0].1.to_pose3().inverse();
+            let mut held = Vec::new();
+            for (j, selection) in grip.particles.iter().enumerate() {
+                held.extend(selection.resolve(&data.particles.position, &data.layout).map_err(|e| {
+                    SceneError::invalid(format!("cloths[{index}].grips[{k}].particles[{j}]"), e.to_string())
+                })?);
+            }
+            held.sort_unstable();
+            held.dedup();
+            let local = held.iter().map(|&p| frame * data.particles.position[p as usize]).collect();
+            for &particle in &held {
+                pins.insert(particle, data.particles.position[particle as usize]);
+            }
+            grips.push(Grip { particles: held, local, motion });
+        }
         let count = data.particles.len();
         let mut user_forces = Vec::with_capacity(desc.user_forces.len());
         for (k, force) in desc.user_forces.iter().enumerate() {
@@ -205,6 +223,7 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
             (
                 data.hinges,
                 data.membranes,
+                Grips(grips),
                 strain_limit,
                 ContactStats::default(),
                 Touching::default(),

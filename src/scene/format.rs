@@ -194,6 +194,9 @@ pub struct ClothDesc {
     /// Particles held in place from the start.
     #[serde(default)]
     pub pins: Vec<PinSelection>,
+    /// Particles held by hands or clamps that move along keyframes.
+    #[serde(default)]
+    pub grips: Vec<GripDesc>,
     /// Initial velocity of every particle [m/s].
     #[serde(default)]
     pub velocity: Vec3,
@@ -213,6 +216,20 @@ pub struct ClothDesc {
     /// Contact of the cloth with itself and with the other cloths that have it.
     #[serde(default)]
     pub self_collision: Option<SelfCollisionDesc>,
+}
+
+/// A grip: the selected particles are pinned and carried rigidly along keyframed poses,
+/// as if held in a clamp. Each particle keeps its place in the grip's frame, taken at the
+/// first keyframe.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GripDesc {
+    /// The held particles.
+    pub particles: Vec<PinSelection>,
+    /// `(time [s], pose)`, at least one, in increasing time; the grip moves linearly in
+    /// translation and spherically in rotation between them (less than half a turn
+    /// between two keyframes) and rests outside them.
+    pub keyframes: Vec<(f32, Pose)>,
 }
 
 /// Cloth–cloth contact: `self_collision: ()` turns it on with the defaults.

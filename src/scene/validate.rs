@@ -244,6 +244,20 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         if let Some(thickness) = cloth.thickness {
             non_negative(&field("thickness"), thickness)?;
         }
+        for (k, grip) in cloth.grips.iter().enumerate() {
+            let at = |name: &str| field(&format!("grips[{k}].{name}"));
+            if grip.keyframes.is_empty() {
+                return Err(SceneError::invalid(at("keyframes"), "a grip needs at least one keyframe"));
+            }
+            if grip.keyframes.windows(2).any(|w| w[1].0 <= w[0].0) {
+                return Err(SceneError::invalid(at("keyframes"), "keyframe times must increase"));
+            }
+            for (j, (time, pose)) in grip.keyframes.iter().enumerate() {
+                finite(&at(&format!("keyframes[{j}]")), *time)?;
+                finite_vec(&at(&format!("keyframes[{j}]")), pose.translation)?;
+                finite_vec(&at(&format!("keyframes[{j}]")), pose.rotation_deg)?;
+            }
+        }
         if let Some(collision) = cloth.self_collision {
             if let Some(separation) = collision.separation {
                 positive(&field("self_collision.separation"), separation)?;
