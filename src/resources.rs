@@ -144,9 +144,8 @@ pub struct ScheduledEdits {
 /// contact did in the current frame.
 #[derive(Resource, Debug, Default)]
 pub struct ClothContacts {
-    /// The cloths in the mesh: entity, the topology build it was made from, and the
-    /// global number of its first vertex.
-    pub members: Vec<(Entity, u32, u32)>,
+    /// The cloths in the mesh, in order: entity and the topology build it was made from.
+    pub members: Vec<(Entity, u32)>,
     /// The combined mesh.
     pub mesh: ContactMesh,
     /// Trees and scratch space.

@@ -80,12 +80,8 @@ pub fn collide_cloths(
     )>,
 ) {
     let contacts = &mut *contacts;
-    let mut members = Vec::new();
-    let mut count = 0;
-    for (entity, particles, _, topology, ..) in &cloths {
-        members.push((entity, topology.builds, count));
-        count += particles.len() as u32;
-    }
+    let members: Vec<(Entity, u32)> =
+        cloths.iter().map(|(entity, _, _, topology, ..)| (entity, topology.builds)).collect();
     if members.is_empty() {
         return;
     }

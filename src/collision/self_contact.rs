@@ -153,6 +153,8 @@ pub struct SelfContactSolver {
     edge_boxes: Vec<Aabb>,
     /// Mean velocity of each vertex over the step, as the contacts change it.
     mean_velocity: Vec<Vec3>,
+    /// The mean velocities the step came with.
+    initial_velocity: Vec<Vec3>,
     /// Zone of each vertex (a union-find forest), for impact zones.
     zone: Vec<u32>,
 }
@@ -175,7 +177,7 @@ impl SelfContactSolver {
         }
         self.mean_velocity.clear();
         self.mean_velocity.extend(x0.iter().zip(x1.iter()).map(|(a, b)| (*b - *a) / h));
-        let before = self.mean_velocity.clone();
+        self.initial_velocity.clone_from(&self.mean_velocity);
 
         // 1. Proximity at the start of the step.
         let pairs = self.candidates(mesh, x0, x1);
@@ -190,8 +192,11 @@ impl SelfContactSolver {
         // 2. Continuous collision, pass after pass. The proximity candidates still cover
         // the sweeps if proximity moved no end point by more than half the margin.
         let margin = self.margin(mesh);
-        let moved =
-            x1.iter().zip(&before).zip(x0).fold(0.0f32, |m, ((x1, v), x0)| m.max((*x1 - (*x0 + h * *v)).length()));
+        let moved = x1
+            .iter()
+            .zip(&self.initial_velocity)
+            .zip(x0)
+            .fold(0.0f32, |m, ((x1, v), x0)| m.max((*x1 - (*x0 + h * *v)).length()));
         let mut pairs = if moved < 0.5 * margin { Some(pairs) } else { None };
         let mut remaining = true;
         for _ in 0..IMPACT_PASSES {
@@ -251,7 +256,7 @@ impl SelfContactSolver {
 
         for k in 0..mesh.len() {
             if mesh.inv_mass[k] > 0.0 {
-                v[k] += self.mean_velocity[k] - before[k];
+                v[k] += self.mean_velocity[k] - self.initial_velocity[k];
             }
         }
         report
@@ -277,13 +282,11 @@ impl SelfContactSolver {
             let mut found = Vec::new();
             triangle_tree.query(&swept(&[p]), |t| {
                 if !mesh.triangles[t as usize].contains(&p) {
-                    found.push(Pair::PointTriangle(p, t));
+                    found.push(t);
                 }
             });
-            found.sort_unstable_by_key(|pair| match pair {
-                Pair::PointTriangle(_, t) | Pair::EdgeEdge(_, t) => *t,
-            });
-            found
+            found.sort_unstable();
+            found.into_iter().map(move |t| Pair::PointTriangle(p, t))
         });
         let edge_boxes = &self.edge_boxes;
         let edge_pairs =
@@ -392,7 +395,9 @@ fn pair_vertices(mesh: &ContactMesh, pair: Pair) -> [u32; 4] {
 }
 
 /// Separation δ and friction μ of a pair: sums of the sides' half gaps, mean friction.
-fn pair_gap_and_friction(mesh: &ContactMesh, vertices: [u32; 4], first_side: usize) -> (f32, f32) {
+fn pair_gap_and_friction(mesh: &ContactMesh, pair: Pair) -> (f32, f32) {
+    let vertices = pair_vertices(mesh, pair);
+    let first_side = if matches!(pair, Pair::PointTriangle(..)) { 1 } else { 2 };
     let side = |range: std::ops::Range<usize>| {
         let n = range.len() as f32;
         let (gap, mu) = range.fold((0.0, 0.0), |(g, m), k| {
@@ -412,18 +417,18 @@ fn pair_gap_and_friction(mesh: &ContactMesh, vertices: [u32; 4], first_side: usi
 fn proximity(mesh: &ContactMesh, pair: Pair, h: f32, x0: &[Vec3]) -> Option<Contact> {
     let vertices = pair_vertices(mesh, pair);
     let [p, a, b, c] = vertices.map(|k| x0[k as usize]);
-    let (stencil, first_side, fallback) = match pair {
+    let (stencil, fallback) = match pair {
         Pair::PointTriangle(_, t) => {
             let w = closest_on_triangle(p, a, b, c);
             let tri = mesh.triangles[t as usize];
-            (Stencil::point_triangle(vertices[0], tri, w), 1, (b - a).cross(c - a))
+            (Stencil::point_triangle(vertices[0], tri, w), (b - a).cross(c - a))
         }
         Pair::EdgeEdge(e, f) => {
             let (s, u) = closest_between_segments(p, a, b, c);
-            (Stencil::edge_edge(mesh.edges[e as usize], mesh.edges[f as usize], s, u), 2, (a - p).cross(c - b))
+            (Stencil::edge_edge(mesh.edges[e as usize], mesh.edges[f as usize], s, u), (a - p).cross(c - b))
         }
     };
-    let (gap, friction) = pair_gap_and_friction(mesh, vertices, first_side);
+    let (gap, friction) = pair_gap_and_friction(mesh, pair);
     let offset = stencil.relative(x0);
     let distance = offset.length();
     if distance >= gap {
@@ -454,8 +459,7 @@ fn impacts(mesh: &ContactMesh, pairs: &[Pair], h: f32, x0: &[Vec3], x1: &[Vec3])
 fn impact(mesh: &ContactMesh, pair: Pair, h: f32, x0: &[Vec3], x1: &[Vec3]) -> Option<Contact> {
     let vertices = pair_vertices(mesh, pair);
     let sweep = Sweep { start: vertices.map(|k| x0[k as usize]), end: vertices.map(|k| x1[k as usize]) };
-    let first_side = if matches!(pair, Pair::PointTriangle(..)) { 1 } else { 2 };
-    let (gap, friction) = pair_gap_and_friction(mesh, vertices, first_side);
+    let (gap, friction) = pair_gap_and_friction(mesh, pair);
     let tolerance = (1e-3 * gap).max(1e-7);
     let (stencil, normal_at_hit) = match pair {
         Pair::PointTriangle(p, tri) => {

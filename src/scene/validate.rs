@@ -7,7 +7,7 @@ use glam::Vec3;
 use super::format::{DEFAULT_SUBSTEPS, EditActionDesc, RayleighDesc, Scene, ShapeDesc};
 use super::load::SceneError;
 use crate::builders::pins::PinSelection;
-use crate::collision::collider::ColliderShape;
+use crate::collision::collider::{ColliderShape, Pose};
 use crate::components::{BendingLawDesc, MembraneDesc};
 use crate::fabrics::{BendingMeasurement, FabricDesc};
 use crate::solver::probes::ClothProbe;
@@ -249,14 +249,7 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
             if grip.keyframes.is_empty() {
                 return Err(SceneError::invalid(at("keyframes"), "a grip needs at least one keyframe"));
             }
-            if grip.keyframes.windows(2).any(|w| w[1].0 <= w[0].0) {
-                return Err(SceneError::invalid(at("keyframes"), "keyframe times must increase"));
-            }
-            for (j, (time, pose)) in grip.keyframes.iter().enumerate() {
-                finite(&at(&format!("keyframes[{j}]")), *time)?;
-                finite_vec(&at(&format!("keyframes[{j}]")), pose.translation)?;
-                finite_vec(&at(&format!("keyframes[{j}]")), pose.rotation_deg)?;
-            }
+            check_keyframes(&at("keyframes"), &grip.keyframes)?;
         }
         if let Some(collision) = cloth.self_collision {
             if let Some(separation) = collision.separation {
@@ -290,17 +283,8 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         }
         non_negative(&field("friction"), collider.friction)?;
         non_negative(&field("thickness"), collider.thickness)?;
-        for (pose_field, pose) in std::iter::once(("pose".to_owned(), &collider.pose))
-            .chain(collider.keyframes.iter().enumerate().map(|(j, (_, pose))| (format!("keyframes[{j}]"), pose)))
-        {
-            finite_vec(&field(&pose_field), pose.translation)?;
-            finite_vec(&field(&pose_field), pose.rotation_deg)?;
-        }
-        if collider.keyframes.windows(2).any(|w| w[1].0 <= w[0].0)
-            || collider.keyframes.iter().any(|k| !k.0.is_finite())
-        {
-            return Err(SceneError::invalid(field("keyframes"), "keyframe times must be finite and increasing"));
-        }
+        check_pose(&field("pose"), &collider.pose)?;
+        check_keyframes(&field("keyframes"), &collider.keyframes)?;
         match &collider.shape {
             ColliderShape::Plane { normal } => {
                 nonzero_vec(&field("shape.normal"), *normal)?;
@@ -456,6 +440,25 @@ fn nonzero_vec(field: &str, value: Vec3) -> Result<Vec3, SceneError> {
         return Err(SceneError::invalid(field, "must not be zero"));
     }
     Ok(value)
+}
+
+/// A pose with finite translation and angles.
+fn check_pose(field: &str, pose: &Pose) -> Result<(), SceneError> {
+    finite_vec(field, pose.translation)?;
+    finite_vec(field, pose.rotation_deg)?;
+    Ok(())
+}
+
+/// Keyframes `(time, pose)` of a collider or a grip: finite poses at finite times that
+/// increase.
+fn check_keyframes(field: &str, keyframes: &[(f32, Pose)]) -> Result<(), SceneError> {
+    for (j, (_, pose)) in keyframes.iter().enumerate() {
+        check_pose(&format!("{field}[{j}]"), pose)?;
+    }
+    if keyframes.windows(2).any(|w| w[1].0 <= w[0].0) || keyframes.iter().any(|k| !k.0.is_finite()) {
+        return Err(SceneError::invalid(field, "keyframe times must be finite and increase"));
+    }
+    Ok(())
 }
 
 fn finite_vec(field: &str, value: Vec3) -> Result<Vec3, SceneError> {
