@@ -40,7 +40,7 @@ pub fn collide_with_bodies(
                 state: c.motion.state_at(t),
                 friction: c.friction,
                 thickness: c.thickness + cloth.thickness,
-                stick: c.stick,
+                response: c.response,
             })
             .collect();
         let Particles { position, velocity, inv_mass, .. } = &mut *particles;

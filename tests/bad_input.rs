@@ -125,3 +125,14 @@ fn grip_keyframes_out_of_order_are_refused() {
     let message = error("pins: [Indices([0, 7])],", grip);
     assert_mentions(&message, &["cloths[0].grips[0].keyframes", "increase"]);
 }
+
+#[test]
+fn response_regimes_whose_thresholds_do_not_nest_are_refused() {
+    let floor = |regimes: &str| {
+        format!("    ],\n    colliders: [(name: \"floor\", shape: Plane(normal: (0.0, 1.0, 0.0)), response: Regimes({regimes}))],\n)")
+    };
+    let message = error("    ],\n)", &floor("outside: 0.01, surface: 0.02, stiffness: 100.0"));
+    assert_mentions(&message, &["colliders[0].response.surface", "T_surface must be below T_outside"]);
+    let message = error("    ],\n)", &floor("outside: 0.01, surface: 0.002, stiffness: 100.0, restitution: 1.5"));
+    assert_mentions(&message, &["colliders[0].response.restitution", "between 0 and 1"]);
+}

@@ -2,19 +2,16 @@
 //! cloth rests on the top and hangs over both edges that meet at the corner; over a
 //! cylinder a disk rests on the top and hangs down around it. Nothing ends inside a body.
 
-use std::path::Path;
+mod common;
 
 use glam::Vec3;
 use selvedge::Simulation;
 use selvedge::components::Particles;
-use selvedge::scene::load_scene;
 
 const TABLE_TOP: f32 = 0.75;
 
 fn settle(name: &str) -> (Simulation, Vec<Vec3>) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
-    let file = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
-    let mut sim = Simulation::from_file(&file).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = common::bundled(name);
     for _ in 0..sim.counts().time.frames {
         sim.step_frame().unwrap_or_else(|e| panic!("{name}: {e}"));
     }

@@ -3,20 +3,17 @@
 //! under a friction stress μ ρ g cos 30° = 0.2443 Pa; with μ = tan 30° + 0.01 it sticks, the
 //! friction carrying ρ g sin 30° = 0.7053 Pa.
 
-use std::path::Path;
+mod common;
 
 use glam::Vec3;
 use selvedge::Simulation;
 use selvedge::components::Particles;
-use selvedge::scene::load_scene;
 
 const RHO: f64 = 0.14395;
 const G: f64 = 9.8;
 
 fn simulation(name: &str) -> Simulation {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
-    let file = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
-    Simulation::from_file(&file).unwrap_or_else(|e| panic!("{e}"))
+    common::bundled(name)
 }
 
 /// Mean position and velocity of the cloth.

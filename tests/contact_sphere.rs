@@ -2,16 +2,11 @@
 //! contact force equal to its weight (0.144 × 0.16 × 9.8 = 0.2258 N) within 2 %, and no
 //! particle goes deeper into the sphere than the contact thickness.
 
-use std::path::Path;
-
-use selvedge::Simulation;
-use selvedge::scene::load_scene;
+mod common;
 
 #[test]
 fn the_contact_force_converges_to_the_weight_without_penetration() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/zheng_sphere.ron");
-    let file = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
-    let mut sim = Simulation::from_file(&file).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = common::bundled("zheng_sphere.ron");
     let weight = 0.144 * 0.4 * 0.4 * 9.8;
     let thickness = 0.001177;
     let frames = sim.counts().time.frames;

@@ -1,17 +1,13 @@
 //! Tunnelling: a cloth thrown at 10 m/s at a 2 mm plate moves 4.2 mm a step, more than the
 //! plate is thick, and still never gets below its top face.
 
-use std::path::Path;
+mod common;
 
-use selvedge::Simulation;
 use selvedge::components::Particles;
-use selvedge::scene::load_scene;
 
 #[test]
 fn a_fast_cloth_does_not_pass_through_a_thin_plate() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tunnel.ron");
-    let file = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
-    let mut sim = Simulation::from_file(&file).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = common::bundled("tunnel.ron");
     let dt = sim.counts().time.dt;
     assert!(10.0 * dt > 0.002, "the test needs steps longer than the plate is thick");
     let top = 0.001f32;

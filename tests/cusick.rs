@@ -2,17 +2,13 @@
 //! The drape coefficients are distinct and ordered like the fabrics' bending lengths
 //! (geometric mean of warp and weft): stiffer, heavier-to-bend fabrics drape less.
 
-use std::path::Path;
+mod common;
 
-use selvedge::Simulation;
 use selvedge::fabrics::FabricName;
-use selvedge::scene::load_scene;
 
 fn drape_coefficient(fabric: FabricName) -> f64 {
     let name = format!("cusick_{}.ron", format!("{fabric:?}").to_lowercase());
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
-    let file = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
-    let mut sim = Simulation::from_file(&file).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = common::bundled(&name);
     for _ in 0..sim.counts().time.frames {
         sim.step_frame().unwrap_or_else(|e| panic!("{e}"));
     }

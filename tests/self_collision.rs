@@ -4,19 +4,15 @@
 //! through themselves (hundreds of pairs; see each scene's comment). Each test also
 //! checks that contact really happened, so it cannot pass on a cloth that never folds.
 
-use std::path::Path;
+mod common;
 
-use selvedge::Simulation;
 use selvedge::components::Particles;
-use selvedge::scene::load_scene;
 
 /// Runs a bundled scene to its end, checking after every frame that no triangle pair
 /// intersects and that no particle is below `floor` [m]; returns the frame-summed
 /// continuous impacts and the largest number of proximity pairs in a step.
 fn run_untangled(name: &str, floor: Option<f32>) -> (f64, f64) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
-    let file = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
-    let mut sim = Simulation::from_file(&file).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = common::bundled(name);
     let (mut impacts, mut pairs) = (0.0, 0.0f64);
     for frame in 1..=sim.counts().time.frames {
         sim.step_frame().unwrap_or_else(|e| panic!("{name}: {e}"));

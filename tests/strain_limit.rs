@@ -2,16 +2,11 @@
 //! (k/ρ = 100 m²/s²) a 1 % limit keeps the largest strain within 1.5 % through the swing,
 //! while without it the cloth stretches tens of percent (Zheng's table 5.1: 220 %).
 
-use std::path::Path;
-
-use selvedge::Simulation;
-use selvedge::scene::load_scene;
+mod common;
 
 /// Runs a bundled scene and returns the largest `max_strain` over all its frames.
 fn peak_strain(name: &str) -> f64 {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
-    let file = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
-    let mut sim = Simulation::from_file(&file).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = common::bundled(name);
     let mut peak = 0.0f64;
     for _ in 0..sim.counts().time.frames {
         sim.step_frame().unwrap_or_else(|e| panic!("{e}"));

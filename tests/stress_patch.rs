@@ -2,16 +2,11 @@
 //! pulled by 1 N/m along its bottom edge settles with a mean normal stress resultant of
 //! 1 N/m along the load (equilibrium of every horizontal cut), within 2 %.
 
-use std::path::Path;
-
-use selvedge::Simulation;
-use selvedge::scene::load_scene;
+mod common;
 
 #[test]
 fn the_stress_patch_carries_one_newton_per_metre() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/stress_patch.ron");
-    let file = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
-    let mut sim = Simulation::from_file(&file).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = common::bundled("stress_patch.ron");
     for _ in 0..sim.counts().time.frames {
         sim.step_frame().unwrap_or_else(|e| panic!("{e}"));
     }

@@ -1,16 +1,19 @@
-//! Cloth against solid bodies: every particle closer to a body than the contact thickness
-//! is put back at that distance, loses its velocity into the body (relative to the body's
-//! moving surface) and slides with Coulomb friction: the tangential velocity drops by at
-//! most μ times the normal velocity removed, and to zero if that suffices (sticking). This
-//! is Zheng's impulse response for a body of infinite mass (eq. 3.30), which gives exact
-//! Coulomb behaviour on a slope: the normal impulse per step is the weight's normal part.
+//! Cloth against solid bodies, at the end of each step. Each collider picks its response:
+//! - slide (the default): every particle closer to a body than the contact thickness is put
+//!   back at that distance, loses its velocity into the body (relative to the body's moving
+//!   surface) and slides with Coulomb friction: the tangential velocity drops by at most μ
+//!   times the normal velocity removed, and to zero if that suffices (sticking). This is
+//!   Zheng's impulse response for a body of infinite mass (eq. 3.30), which gives exact
+//!   Coulomb behaviour on a slope: the normal impulse per step is the weight's normal part;
+//! - stick: Bricis's restrain-on-contact (B5);
+//! - regimes: Durupınar's penalty and velocity corrections with two thresholds (D11).
 
 use glam::Vec3;
 use parry3d::query::Ray;
 use parry3d::shape::Shape;
 use rayon::prelude::*;
 
-use super::collider::ColliderState;
+use super::collider::{ColliderState, ContactResponse, Regimes};
 use crate::solver::PARALLEL_MIN_LEN;
 
 /// A body as the contact kernel sees it at one instant.
@@ -25,9 +28,8 @@ pub struct ContactBody<'a> {
     /// Distance kept between the cloth's mid-surface and the body [m]: the body's and the
     /// cloth's contact thicknesses together.
     pub thickness: f32,
-    /// Bricis's restrain-on-contact (B5): a particle that touches the body moves with it
-    /// from then on, neither sliding nor lifting off.
-    pub stick: bool,
+    /// What touching it does.
+    pub response: ContactResponse,
 }
 
 /// What the contacts of one step did to one cloth.
@@ -75,6 +77,25 @@ pub struct Touch {
     pub surface_velocity: Vec3,
 }
 
+/// Where a particle is against a body.
+#[derive(Debug, Clone, Copy)]
+struct Proximity {
+    /// Signed distance to the body's surface, negative inside [m].
+    signed: f32,
+    /// The body's outward normal there.
+    outward: Vec3,
+}
+
+/// One particle as a response changes it.
+struct Particle<'p> {
+    x: &'p mut Vec3,
+    v: &'p mut Vec3,
+    mass: f32,
+    area: f32,
+    /// The impulse an implicit step's constraints gave it [N·s].
+    support: Vec3,
+}
+
 /// Resolves the contacts of particles `x`, `v` (masses `1/inv_mass`, areas `area`) with
 /// `bodies` at the end of a step of `h` [s] that started at positions `start`. The
 /// particles left touching a body are listed in `touching`, in particle order, for the
@@ -84,9 +105,8 @@ pub struct Touch {
 ///
 /// A particle that moved further than the contact thickness in the step is first traced
 /// along its path (a ray from `start`): if the path enters a body, the particle is put
-/// back where it entered, so fast cloth cannot tunnel through thin bodies. Friction also
-/// takes back the sliding the step made (`Δx = h Δv_t`), so a sticking particle does not
-/// creep by `h² g sin θ` a step. Pinned particles (`free_inv_mass` zero) are left alone.
+/// back where it entered, so fast cloth cannot tunnel through thin bodies. Pinned particles
+/// (`free_inv_mass` zero) are left alone.
 pub fn resolve_body_contacts(
     bodies: &[ContactBody<'_>],
     inv_mass: &[f32],
@@ -110,79 +130,26 @@ pub fn resolve_body_contacts(
                 return outcome;
             }
             let before = *v;
+            let mut particle = Particle { x, v, mass: 1.0 / inv_mass[i], area: area(i), support: support[i] };
             for body in bodies {
-                // Where the particle is against the body: the point its path entered the
-                // body if it crossed the surface this step, else its nearest surface point.
-                let path = *x - start[i];
-                let entry = (path.length() > body.thickness && !body.shape.contains_point(&body.state.pose, start[i]))
-                    .then(|| {
-                        let ray = Ray::new(start[i], path);
-                        body.shape
-                            .cast_ray_and_get_normal(&body.state.pose, &ray, 1.0, true)
-                            .map(|hit| (ray.point_at(hit.time_of_impact), hit.normal))
-                    })
-                    .flatten();
-                let (signed, outward) = match entry {
-                    Some((point, normal)) => {
-                        *x = point;
-                        (0.0, normal)
-                    }
-                    None => {
-                        let projection = body.shape.project_point(&body.state.pose, *x, false);
-                        let offset = *x - projection.point;
-                        let distance = offset.length();
-                        let signed = if projection.is_inside { -distance } else { distance };
-                        if signed >= body.thickness {
-                            continue;
-                        }
-                        // A particle exactly on the surface has no direction to leave by.
-                        let Some(outward) = offset.try_normalize().map(|n| if projection.is_inside { -n } else { n })
-                        else {
-                            continue;
-                        };
-                        (signed, outward)
+                let Some(near) = locate(body, start[i], particle.x) else {
+                    continue;
+                };
+                outcome.totals.max_penetration = outcome.totals.max_penetration.max(-near.signed);
+                outcome.totals.contact_area = particle.area;
+                let touches = match body.response {
+                    ContactResponse::Slide => slide(body, near, &mut particle, h, &mut outcome.totals),
+                    ContactResponse::Stick => stick(body, near, &mut particle, h, &mut outcome.totals),
+                    ContactResponse::Regimes(regimes) => {
+                        respond_in_regimes(body, &regimes, near, &mut particle, h, &mut outcome.totals)
                     }
                 };
-                outcome.totals.max_penetration = outcome.totals.max_penetration.max(-signed);
-                outcome.totals.contact_area = area(i);
-                *x += (body.thickness - signed) * outward;
-                let surface = body.state.velocity_at(*x);
-                outcome.touch = Some(Touch { particle: i as u32, normal: outward, surface_velocity: surface });
-                let relative = *v - surface;
-                let approach = relative.dot(outward);
-                let mass = 1.0 / inv_mass[i];
-                if body.stick {
-                    // Take back the whole step's motion relative to the body.
-                    *x -= h * (relative - relative.dot(outward) * outward);
-                    *v = surface;
-                    outcome.totals.normal_impulse += mass * approach.abs();
-                    outcome.totals.friction_impulse += mass * (relative - approach * outward).length();
-                    continue;
+                if touches {
+                    let surface_velocity = body.state.velocity_at(*particle.x);
+                    outcome.touch = Some(Touch { particle: i as u32, normal: near.outward, surface_velocity });
                 }
-                // What an implicit solve's constraint pushed along the normal counts as
-                // contact force (signed: its pulls cancel its pushes across the cloth).
-                outcome.totals.normal_impulse += support[i].dot(outward);
-                // The normal velocity this response removes bounds friction. (Friction from
-                // the constraint's own impulse is left out: per particle it mixes the
-                // body's push with stiff internal forces and made resting cloth sticky.)
-                let removed = (-approach).max(0.0);
-                if removed == 0.0 {
-                    continue;
-                }
-                let normal_part = approach.min(0.0);
-                let tangential = relative - approach * outward;
-                let speed = tangential.length();
-                let slip = if speed <= body.friction * removed {
-                    Vec3::ZERO
-                } else {
-                    tangential * (1.0 - body.friction * removed / speed)
-                };
-                *v = surface + slip + (approach - normal_part) * outward;
-                *x += h * (slip - tangential);
-                outcome.totals.normal_impulse += mass * removed;
-                outcome.totals.friction_impulse += mass * (tangential - slip).length();
             }
-            outcome.totals.impulse = (*v - before) / inv_mass[i] + support[i];
+            outcome.totals.impulse = (*particle.v - before) * particle.mass + particle.support;
             outcome
         })
         .collect();
@@ -192,6 +159,136 @@ pub fn resolve_body_contacts(
         totals.add(&o.totals);
         totals
     })
+}
+
+/// Where the particle at `x` is against the body, if within the body's reach: the point
+/// its path from `start` entered the body if it crossed the surface this step (`x` is
+/// moved there and the distance is zero), else its nearest surface point.
+fn locate(body: &ContactBody<'_>, start: Vec3, x: &mut Vec3) -> Option<Proximity> {
+    let path = *x - start;
+    let entry = (path.length() > body.thickness && !body.shape.contains_point(&body.state.pose, start))
+        .then(|| {
+            let ray = Ray::new(start, path);
+            body.shape
+                .cast_ray_and_get_normal(&body.state.pose, &ray, 1.0, true)
+                .map(|hit| (ray.point_at(hit.time_of_impact), hit.normal))
+        })
+        .flatten();
+    if let Some((point, outward)) = entry {
+        *x = point;
+        return Some(Proximity { signed: 0.0, outward });
+    }
+    let projection = body.shape.project_point(&body.state.pose, *x, false);
+    let offset = *x - projection.point;
+    let distance = offset.length();
+    let signed = if projection.is_inside { -distance } else { distance };
+    if signed >= body.thickness + body.response.reach() {
+        return None;
+    }
+    // A particle exactly on the surface has no direction to leave by.
+    let outward = offset.try_normalize().map(|n| if projection.is_inside { -n } else { n })?;
+    Some(Proximity { signed, outward })
+}
+
+/// Zheng's response: put back at the contact thickness, the approach velocity relative to
+/// the surface removed, and Coulomb friction bounded by μ times the velocity removed (to
+/// zero if that suffices: sticking). Friction also takes back the sliding the step made
+/// (`Δx = h Δv_t`), so a sticking particle does not creep by `h² g sin θ` a step.
+fn slide(body: &ContactBody<'_>, near: Proximity, p: &mut Particle<'_>, h: f32, totals: &mut ContactTotals) -> bool {
+    let outward = near.outward;
+    *p.x += (body.thickness - near.signed) * outward;
+    let surface = body.state.velocity_at(*p.x);
+    let relative = *p.v - surface;
+    let approach = relative.dot(outward);
+    // What an implicit solve's constraint pushed along the normal counts as contact force
+    // (signed: its pulls cancel its pushes across the cloth).
+    totals.normal_impulse += p.support.dot(outward);
+    // The normal velocity this response removes bounds friction. (Friction from the
+    // constraint's own impulse is left out: per particle it mixes the body's push with
+    // stiff internal forces and made resting cloth sticky.)
+    let removed = (-approach).max(0.0);
+    if removed == 0.0 {
+        return true;
+    }
+    let tangential = relative - approach * outward;
+    let speed = tangential.length();
+    let slip = if speed <= body.friction * removed {
+        Vec3::ZERO
+    } else {
+        tangential * (1.0 - body.friction * removed / speed)
+    };
+    *p.v = surface + slip;
+    *p.x += h * (slip - tangential);
+    totals.normal_impulse += p.mass * removed;
+    totals.friction_impulse += p.mass * (tangential - slip).length();
+    true
+}
+
+/// Bricis's restrain-on-contact (B5): put back at the contact thickness, the whole step's
+/// motion relative to the body taken back, and moving with the body from then on.
+fn stick(body: &ContactBody<'_>, near: Proximity, p: &mut Particle<'_>, h: f32, totals: &mut ContactTotals) -> bool {
+    let outward = near.outward;
+    *p.x += (body.thickness - near.signed) * outward;
+    let surface = body.state.velocity_at(*p.x);
+    let relative = *p.v - surface;
+    let approach = relative.dot(outward);
+    let tangential = relative - approach * outward;
+    *p.x -= h * tangential;
+    *p.v = surface;
+    totals.normal_impulse += p.mass * approach.abs();
+    totals.friction_impulse += p.mass * tangential.length();
+    true
+}
+
+/// Durupınar's four regimes (D11), with distances measured from the surface grown by the
+/// contact thickness. Interference (behind that surface) is corrected in position and
+/// velocity; a particle within `surface` gets the penalty and the velocity correction;
+/// one within `outside` only the penalty. The penalty acts over the step as a force would
+/// (`Δv = h F / m`, and the position moves by `h Δv`). Returns whether the particle is in
+/// contact (cases 2 and 3) rather than only near.
+fn respond_in_regimes(
+    body: &ContactBody<'_>,
+    regimes: &Regimes,
+    near: Proximity,
+    p: &mut Particle<'_>,
+    h: f32,
+    totals: &mut ContactTotals,
+) -> bool {
+    let outward = near.outward;
+    let depth_below_surface = body.thickness - near.signed;
+    let interference = depth_below_surface >= 0.0;
+    if interference {
+        *p.x += depth_below_surface * outward;
+    }
+    let distance = (near.signed - body.thickness).max(0.0);
+    let surface = body.state.velocity_at(*p.x);
+    let relative = *p.v - surface;
+    let approach = relative.dot(outward);
+    let before = *p.v;
+    let corrected = distance < regimes.surface;
+    if corrected && approach < 0.0 {
+        let tangential = relative - approach * outward;
+        *p.v = surface + regimes.tangential * tangential - regimes.restitution * approach * outward;
+        *p.x += h * (regimes.tangential - 1.0) * tangential;
+    }
+    if !interference {
+        // Backward Euler on the penalty: its pressure is taken where the kick leaves the
+        // particle (distance + h kick) and at the velocity after the kick. A cloth at rest
+        // then rests exactly where k × depth = ρ g, rather than lower by the step's own fall
+        // g h², and no stiffness makes the penalty unstable.
+        let per_pressure = h * p.area / p.mass;
+        let approach = (*p.v - surface).dot(outward);
+        let pressure = regimes.stiffness * (regimes.outside - distance) - regimes.damping * approach;
+        let give = 1.0 + per_pressure * (regimes.damping + h * regimes.stiffness);
+        let kick = (per_pressure * pressure / give).max(0.0) * outward;
+        *p.v += kick;
+        *p.x += h * kick;
+    }
+    let change = (*p.v - before) * p.mass;
+    let normal = change.dot(outward);
+    totals.normal_impulse += normal.abs();
+    totals.friction_impulse += (change - normal * outward).length();
+    corrected
 }
 
 #[cfg(test)]
@@ -216,7 +313,8 @@ mod tests {
     #[test]
     fn a_particle_below_the_ground_is_put_back_and_slowed_by_friction() {
         let (shape, state) = ground();
-        let body = ContactBody { shape: &shape, state, friction: 0.5, thickness: 0.0, stick: false };
+        let body =
+            ContactBody { shape: &shape, state, friction: 0.5, thickness: 0.0, response: ContactResponse::Slide };
         let mut x = [Vec3::new(0.0, -0.01, 0.0), Vec3::new(0.0, 1.0, 0.0)];
         let mut v = [Vec3::new(2.0, -1.0, 0.0), Vec3::new(0.0, -1.0, 0.0)];
         let totals = resolve_body_contacts(
@@ -244,7 +342,8 @@ mod tests {
     fn enough_friction_makes_a_particle_stick_and_a_moving_surface_carries_it() {
         let (shape, mut state) = ground();
         state.linear = Vec3::new(0.3, 0.0, 0.0);
-        let body = ContactBody { shape: &shape, state, friction: 2.0, thickness: 0.001, stick: false };
+        let body =
+            ContactBody { shape: &shape, state, friction: 2.0, thickness: 0.001, response: ContactResponse::Slide };
         let mut x = [Vec3::new(0.0, 0.0005, 0.0)];
         let mut v = [Vec3::new(0.5, -0.2, 0.0)];
         resolve(body, 0.0, &x.clone(), &mut x, &mut v);
@@ -257,7 +356,8 @@ mod tests {
         // A 2 mm plate; the particle jumps from 5 cm above to 5 cm below in one step.
         let plate = Cuboid::new(Vec3::new(1.0, 0.001, 1.0));
         let state = ColliderState { pose: Pose3::IDENTITY, linear: Vec3::ZERO, angular: Vec3::ZERO };
-        let body = ContactBody { shape: &plate, state, friction: 0.0, thickness: 0.0005, stick: false };
+        let body =
+            ContactBody { shape: &plate, state, friction: 0.0, thickness: 0.0005, response: ContactResponse::Slide };
         let start = [Vec3::new(0.1, 0.05, 0.0)];
         let mut x = [Vec3::new(0.1, -0.05, 0.0)];
         let mut v = [Vec3::new(0.0, -10.0, 0.0)];
@@ -270,12 +370,83 @@ mod tests {
     fn in_stick_mode_a_touching_particle_moves_with_the_body_even_when_pulled_away() {
         let (shape, mut state) = ground();
         state.linear = Vec3::new(0.2, 0.0, 0.0);
-        let body = ContactBody { shape: &shape, state, friction: 0.0, thickness: 0.001, stick: true };
+        let body =
+            ContactBody { shape: &shape, state, friction: 0.0, thickness: 0.001, response: ContactResponse::Stick };
         let start = [Vec3::new(0.0, 0.0008, 0.0)];
         let mut x = [Vec3::new(0.01, 0.0009, 0.0)];
         let mut v = [Vec3::new(1.0, 0.1, 0.0)];
         resolve(body, 0.01, &start, &mut x, &mut v);
         assert_eq!(v[0], Vec3::new(0.2, 0.0, 0.0));
         assert!((x[0] - Vec3::new(0.002, 0.001, 0.0)).length() < 1e-6, "moved with the body: {}", x[0]);
+    }
+    fn regimes(stiffness: f32, damping: f32) -> ContactResponse {
+        ContactResponse::Regimes(Regimes {
+            outside: 0.01,
+            surface: 0.002,
+            stiffness,
+            damping,
+            tangential: 0.5,
+            restitution: 0.2,
+        })
+    }
+
+    #[test]
+    fn within_t_outside_only_the_damped_penalty_acts() {
+        let (shape, state) = ground();
+        for (damping, kick) in [(0.0, 0.004 / 1.01), (2.0, 0.006 / 1.03)] {
+            // 6 mm from the grown surface: pressure k (T_out − d) + c v_approach over h = 10 ms,
+            // taken after the kick (backward Euler): divided by 1 + h (c + h k) = 1.01 + h c.
+            let body = ContactBody {
+                shape: &shape,
+                state,
+                friction: 0.0,
+                thickness: 0.001,
+                response: regimes(100.0, damping),
+            };
+            let mut x = [Vec3::new(0.0, 0.007, 0.0)];
+            let mut v = [Vec3::new(0.3, -0.1, 0.0)];
+            let totals = resolve(body, 0.01, &x.clone(), &mut x, &mut v);
+            assert!((v[0] - Vec3::new(0.3, -0.1 + kick, 0.0)).length() < 1e-6, "{}", v[0]);
+            assert!((x[0].y - (0.007 + 0.01 * kick)).abs() < 1e-7);
+            assert!((totals.normal_impulse - kick).abs() < 1e-6 && totals.contact_area == 1.0);
+        }
+    }
+
+    #[test]
+    fn within_t_surface_the_velocity_is_corrected_as_vassilev_and_spanlang_do() {
+        let (shape, state) = ground();
+        let body = ContactBody { shape: &shape, state, friction: 0.0, thickness: 0.001, response: regimes(100.0, 0.0) };
+        let mut x = [Vec3::new(0.0, 0.002, 0.0)];
+        let mut v = [Vec3::new(1.0, -0.5, 0.0)];
+        let mut touching = Vec::new();
+        let ones = [1.0];
+        resolve_body_contacts(
+            &[body],
+            &ones,
+            &ones,
+            |_| 1.0,
+            0.01,
+            &x.clone(),
+            &[Vec3::ZERO],
+            &mut x,
+            &mut v,
+            &mut touching,
+        );
+        // v = C_fric v_t − C_refl v_n, then the penalty 100 × 9 mm over 10 ms (backward Euler).
+        assert!((v[0] - Vec3::new(0.5, 0.1 + 0.009 / 1.01, 0.0)).length() < 1e-6, "{}", v[0]);
+        assert!((x[0].x + 0.005).abs() < 1e-7, "the step's sliding is taken back by the correction");
+        assert_eq!(touching.len(), 1, "case 2 is a contact");
+    }
+
+    #[test]
+    fn interference_is_corrected_in_position_and_velocity() {
+        let (shape, state) = ground();
+        let body = ContactBody { shape: &shape, state, friction: 0.0, thickness: 0.001, response: regimes(100.0, 0.0) };
+        let mut x = [Vec3::new(0.0, -0.003, 0.0)];
+        let mut v = [Vec3::new(0.0, -1.0, 0.0)];
+        let totals = resolve(body, 0.01, &x.clone(), &mut x, &mut v);
+        assert!((x[0].y - 0.001).abs() < 1e-7, "put back on the grown surface");
+        assert!((v[0].y - 0.2).abs() < 1e-6, "reflected with C_refl = 0.2, no penalty");
+        assert!((totals.max_penetration - 0.003).abs() < 1e-7);
     }
 }

@@ -51,6 +51,60 @@ pub enum ColliderShape {
     },
 }
 
+/// How cloth responds to touching a collider.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub enum ContactResponse {
+    /// It slides with Coulomb friction and may lift off (Zheng's impulse response).
+    #[default]
+    Slide,
+    /// It stays where it touched, moving with the body (Bricis's restrain-on-contact, B5).
+    Stick,
+    /// Durupınar's four regimes with two distance thresholds (D11), after Pelechano.
+    Regimes(Regimes),
+}
+
+/// Durupınar's response regimes (D11). Distances are measured from the body's surface
+/// grown by the contact thickness. Beyond `outside` nothing happens (case 0). Within it a
+/// penalty pressure pushes the cloth out (case 1). Within `surface` the approach velocity is
+/// also corrected, after Vassilev and Spanlang: `v = C_fric v_t − C_refl v_n + v_body`
+/// (case 2). A particle found behind the surface, or whose path crossed it, is put back on
+/// the surface and gets the same velocity correction (case 3, interference).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Regimes {
+    /// T_outside: reach of the penalty pressure [m].
+    pub outside: f32,
+    /// T_surface: distance under which the velocity is corrected [m]; below `outside`.
+    pub surface: f32,
+    /// Penalty pressure per metre of depth inside `outside` [Pa/m]. A cloth of areal
+    /// density ρ rests where the depth is ρ g / stiffness.
+    pub stiffness: f32,
+    /// Penalty pressure per unit of approach speed [Pa·s/m], so that the cloth does not
+    /// bounce on the penalty for ever. Critical damping is 2 √(stiffness · ρ).
+    #[serde(default)]
+    pub damping: f32,
+    /// C_fric: fraction of the tangential velocity a correction keeps [-].
+    #[serde(default = "one")]
+    pub tangential: f32,
+    /// C_refl: fraction of the approach velocity a correction reflects [-].
+    #[serde(default)]
+    pub restitution: f32,
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+impl ContactResponse {
+    /// How far beyond the contact thickness this response acts [m].
+    pub fn reach(&self) -> f32 {
+        match self {
+            ContactResponse::Regimes(regimes) => regimes.outside,
+            ContactResponse::Slide | ContactResponse::Stick => 0.0,
+        }
+    }
+}
+
 /// Why a shape could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ShapeError {

@@ -4,7 +4,7 @@ use bevy_ecs::prelude::*;
 use parry3d::shape::SharedShape;
 
 use crate::collision::body_contact::{ContactTotals, Touch};
-use crate::collision::collider::ColliderMotion;
+use crate::collision::collider::{ColliderMotion, ContactResponse};
 
 /// A static or kinematic solid body (E5, D11, B5): a parry3d shape that moves along its
 /// motion. Its own entity.
@@ -20,8 +20,8 @@ pub struct Collider {
     pub friction: f32,
     /// Extra distance cloth keeps from its surface [m].
     pub thickness: f32,
-    /// Restrain-on-contact: cloth that touches it stays (Bricis B5).
-    pub stick: bool,
+    /// How cloth responds to touching it.
+    pub response: ContactResponse,
 }
 
 impl std::fmt::Debug for Collider {
@@ -31,7 +31,7 @@ impl std::fmt::Debug for Collider {
             .field("motion", &self.motion)
             .field("friction", &self.friction)
             .field("thickness", &self.thickness)
-            .field("stick", &self.stick)
+            .field("response", &self.response)
             .finish_non_exhaustive()
     }
 }

@@ -5,7 +5,7 @@ use std::path::Path;
 use bevy_ecs::prelude::*;
 use glam::Vec3;
 
-use super::format::{ClothDesc, ContactResponse, EditActionDesc, LimitedEdgesDesc, RayleighDesc, Scene, ShapeDesc};
+use super::format::{ClothDesc, EditActionDesc, LimitedEdgesDesc, RayleighDesc, Scene, ShapeDesc};
 use super::load::SceneError;
 use super::validate::{TimePlan, time_plan};
 use crate::builders::ClothData;
@@ -15,7 +15,7 @@ use crate::builders::mesh::{build_from_mesh, read_obj};
 use crate::builders::pins::PinSelection;
 use crate::builders::surface::limited_edges;
 use crate::builders::tear::Cut;
-use crate::collision::collider::{ColliderMotion, ColliderShape, Pose};
+use crate::collision::collider::{ColliderMotion, ColliderShape, ContactResponse, Pose};
 use crate::components::{
     Cloth, ClothTopology, Collider, ContactStats, Grip, Grips, Pins, RenderMesh, SelfCollision, SolverWorkspace,
     StrainLimit, Touching, UserForces,
@@ -100,7 +100,7 @@ fn spawn_colliders(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
             }),
             friction: scene.ground.friction,
             thickness: 0.0,
-            stick: false,
+            response: ContactResponse::Slide,
         });
     }
     for (k, desc) in scene.colliders.iter().enumerate() {
@@ -123,7 +123,7 @@ fn spawn_colliders(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
             motion,
             friction: desc.friction,
             thickness: desc.thickness,
-            stick: desc.response == ContactResponse::Stick,
+            response: desc.response,
         });
     }
     Ok(())

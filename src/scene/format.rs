@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::builders::Placement;
 use crate::builders::pins::{GridEdge, PinSelection};
-use crate::collision::collider::{ColliderShape, Pose};
+use crate::collision::collider::{ColliderShape, ContactResponse, Pose};
 use crate::components::ClothMaterial;
 use crate::fabrics::FabricDesc;
 use crate::solver::integrate::Integrator;
@@ -371,16 +371,6 @@ pub struct ColliderDesc {
     /// How cloth responds to touching it.
     #[serde(default)]
     pub response: ContactResponse,
-}
-
-/// How cloth responds to touching a collider.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-pub enum ContactResponse {
-    /// It slides with Coulomb friction and may lift off (Zheng).
-    #[default]
-    Slide,
-    /// It stays where it touched, moving with the body (Bricis's restrain-on-contact, B5).
-    Stick,
 }
 
 fn default_friction() -> f32 {

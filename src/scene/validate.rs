@@ -7,7 +7,7 @@ use glam::Vec3;
 use super::format::{DEFAULT_SUBSTEPS, EditActionDesc, RayleighDesc, Scene, ShapeDesc};
 use super::load::SceneError;
 use crate::builders::pins::PinSelection;
-use crate::collision::collider::{ColliderShape, Pose};
+use crate::collision::collider::{ColliderShape, ContactResponse, Pose, Regimes};
 use crate::components::{BendingLawDesc, MembraneDesc};
 use crate::fabrics::{BendingMeasurement, FabricDesc};
 use crate::solver::probes::ClothProbe;
@@ -285,6 +285,9 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         non_negative(&field("thickness"), collider.thickness)?;
         check_pose(&field("pose"), &collider.pose)?;
         check_keyframes(&field("keyframes"), &collider.keyframes)?;
+        if let ContactResponse::Regimes(regimes) = &collider.response {
+            check_regimes(&field("response"), regimes)?;
+        }
         match &collider.shape {
             ColliderShape::Plane { normal } => {
                 nonzero_vec(&field("shape.normal"), *normal)?;
@@ -392,6 +395,24 @@ fn check_fabric(field: &str, fabric: &FabricDesc) -> Result<(), SceneError> {
         && !(0.0..0.5).contains(&nu)
     {
         return Err(SceneError::invalid(at("poisson"), format!("{nu} is outside [0, 0.5)")));
+    }
+    Ok(())
+}
+
+/// Durupınar's thresholds must nest (0 ≤ T_surface < T_outside) and the corrections must
+/// not add energy.
+fn check_regimes(field: &str, regimes: &Regimes) -> Result<(), SceneError> {
+    let at = |name: &str| format!("{field}.{name}");
+    positive(&at("outside"), regimes.outside)?;
+    if non_negative(&at("surface"), regimes.surface)? >= regimes.outside {
+        return Err(SceneError::invalid(at("surface"), "T_surface must be below T_outside"));
+    }
+    non_negative(&at("stiffness"), regimes.stiffness)?;
+    non_negative(&at("damping"), regimes.damping)?;
+    for (name, value) in [("tangential", regimes.tangential), ("restitution", regimes.restitution)] {
+        if !(0.0..=1.0).contains(&non_negative(&at(name), value)?) {
+            return Err(SceneError::invalid(at(name), "must be a fraction between 0 and 1"));
+        }
     }
     Ok(())
 }

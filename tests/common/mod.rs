@@ -40,3 +40,10 @@ pub fn material(stiffness: f32, damping: f32) -> String {
     )
 }
 pub mod oscillator;
+
+/// Builds the bundled scene `scenes/<name>`.
+pub fn bundled(name: &str) -> Simulation {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
+    let file = selvedge::scene::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    Simulation::from_file(&file).unwrap_or_else(|e| panic!("{e}"))
+}
