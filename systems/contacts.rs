@@ -3,7 +3,7 @@
 use bevy_ecs::prelude::*;
 
 use crate::collision::body_contact::{ContactBody, resolve_body_contacts};
-use crate::collision::self_contact::{ContactMesh, SelfContactReport};
+use crate::collision::self_contact::{ContactMesh, SelfContactReport, SelfContactSolver};
 use crate::components::{
     Cloth, ClothMaterial, ClothTopology, Collider, ContactStats, Particles, SelfCollision, SolverWorkspace, Touching,
     Triangles,
@@ -92,9 +92,12 @@ pub fn collide_cloths(
             mesh.triangles.extend(triangles.indices.iter().map(|t| t.map(|k| k + offset)));
             mesh.half_gap.extend(std::iter::repeat_n(0.5 * collision.separation, particles.len()));
             mesh.friction.extend(std::iter::repeat_n(collision.friction, particles.len()));
+            mesh.layer.extend(std::iter::repeat_n(collision.layer, particles.len()));
         }
         mesh.edges = ContactMesh::edges_of(&mesh.triangles);
         contacts.mesh = mesh;
+        // A new mesh may start tangled: the solver starts over, looking for crossings.
+        contacts.solver = SelfContactSolver::default();
         contacts.members = members;
     }
     let ClothContacts { mesh, solver, start, end, velocity, frame, .. } = contacts;

@@ -129,7 +129,9 @@ pub fn measure_contact_probes(
 /// `self_contact_pairs` (mean number of pairs closer than their separation per step),
 /// `self_impacts` (continuous collisions resolved by impulses in the frame) and
 /// `impact_zone_rounds` (rounds of rigid impact zones the frame needed; 0 when impulses
-/// sufficed). Runs in [`FrameSystems::Finish`].
+/// sufficed) and `untangle_crossings` (edge–triangle crossings found at the starts of the
+/// frame's steps, summed, and being untangled; 0 once the cloths are apart). Runs in
+/// [`FrameSystems::Finish`].
 pub fn measure_self_contact_probes(
     settings: Res<StepSettings>,
     contacts: Res<ClothContacts>,
@@ -143,6 +145,7 @@ pub fn measure_self_contact_probes(
     probes.set("self_contact_pairs", f64::from(frame.proximity) / f64::from(settings.substeps.max(1)));
     probes.set("self_impacts", f64::from(frame.impacts));
     probes.set("impact_zone_rounds", f64::from(frame.zone_rounds));
+    probes.set("untangle_crossings", f64::from(frame.crossings));
 }
 
 /// Counts the frame. Runs in [`FrameSystems::Finish`], last.

@@ -129,7 +129,9 @@ fn grip_keyframes_out_of_order_are_refused() {
 #[test]
 fn response_regimes_whose_thresholds_do_not_nest_are_refused() {
     let floor = |regimes: &str| {
-        format!("    ],\n    colliders: [(name: \"floor\", shape: Plane(normal: (0.0, 1.0, 0.0)), response: Regimes({regimes}))],\n)")
+        format!(
+            "    ],\n    colliders: [(name: \"floor\", shape: Plane(normal: (0.0, 1.0, 0.0)), response: Regimes({regimes}))],\n)"
+        )
     };
     let message = error("    ],\n)", &floor("outside: 0.01, surface: 0.02, stiffness: 100.0"));
     assert_mentions(&message, &["colliders[0].response.surface", "T_surface must be below T_outside"]);

@@ -44,7 +44,7 @@ pub fn triangles_intersect(first: [DVec3; 3], second: [DVec3; 3]) -> bool {
 
 /// Whether the segment `p → q` passes through the triangle (Möller–Trumbore), ends
 /// included.
-fn segment_crosses_triangle(p: DVec3, q: DVec3, [a, b, c]: [DVec3; 3]) -> bool {
+pub fn segment_crosses_triangle(p: DVec3, q: DVec3, [a, b, c]: [DVec3; 3]) -> bool {
     let direction = q - p;
     let (e1, e2) = (b - a, c - a);
     let h = direction.cross(e2);

@@ -7,3 +7,4 @@ pub mod collider;
 pub mod intersection;
 pub mod primitives;
 pub mod self_contact;
+pub mod untangle;

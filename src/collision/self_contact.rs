@@ -14,6 +14,10 @@
 //!    untangled it ends untangled; in the last resort every vertex keeps its start
 //!    position.
 //!
+//! Before these, while the mesh may be tangled (at first, and until a step finds it is
+//! not), edges crossing triangles are moved back through ([`super::untangle`]); the
+//! vertices moved are left out of the three stages for that step.
+//!
 //! Impulses are split by mass (Zheng eq. 3.30, Bridson's weights): a pinned vertex has
 //! infinite mass and does not move. Impulses are applied one pair after another in a
 //! fixed order, so results do not depend on the thread count.
@@ -25,6 +29,7 @@ use rayon::prelude::*;
 
 use super::bvh::{Aabb, Bvh};
 use super::primitives::{Sweep, closest_between_segments, closest_on_triangle};
+use super::untangle::Untangler;
 use crate::solver::PARALLEL_MIN_LEN;
 
 /// The cloths that collide with one another, as one mesh with global vertex numbers.
@@ -45,6 +50,9 @@ pub struct ContactMesh {
     pub half_gap: Vec<f32>,
     /// Each vertex's Coulomb friction coefficient; a pair uses the mean of its sides.
     pub friction: Vec<f32>,
+    /// Each vertex's layer: a higher layer belongs on the side of a lower layer's
+    /// triangle normals, which is how untangling knows which side is wrong.
+    pub layer: Vec<u32>,
 }
 
 impl ContactMesh {
@@ -91,6 +99,8 @@ pub struct SelfContactReport {
     pub zone_rounds: u32,
     /// Whether the last resort held every vertex at its start.
     pub frozen: bool,
+    /// Edge–triangle crossings found at the start of the step and being untangled.
+    pub crossings: u32,
 }
 
 impl SelfContactReport {
@@ -100,6 +110,7 @@ impl SelfContactReport {
         self.impacts += other.impacts;
         self.zone_rounds += other.zone_rounds;
         self.frozen |= other.frozen;
+        self.crossings += other.crossings;
     }
 }
 
@@ -157,6 +168,8 @@ pub struct SelfContactSolver {
     initial_velocity: Vec<Vec3>,
     /// Zone of each vertex (a union-find forest), for impact zones.
     zone: Vec<u32>,
+    /// Untangling of crossings found at the start of a step.
+    untangler: Untangler,
 }
 
 impl SelfContactSolver {
@@ -174,6 +187,11 @@ impl SelfContactSolver {
         let mut report = SelfContactReport::default();
         if mesh.triangles.is_empty() || h <= 0.0 {
             return report;
+        }
+        self.untangler.clear(mesh.len());
+        if self.untangler.watching() {
+            self.refit(mesh, x0, x1);
+            report.crossings = self.untangler.run(mesh, &self.triangle_tree, h, x0, x1, v);
         }
         self.mean_velocity.clear();
         self.mean_velocity.extend(x0.iter().zip(x1.iter()).map(|(a, b)| (*b - *a) / h));
@@ -259,6 +277,11 @@ impl SelfContactSolver {
                 v[k] += self.mean_velocity[k] - self.initial_velocity[k];
             }
         }
+        if report.zone_rounds > 0 {
+            // A zone holding moving pinned vertices is not rigid and may have let cloth
+            // through: look again next step.
+            self.untangler.watch();
+        }
         report
     }
 
@@ -269,22 +292,22 @@ impl SelfContactSolver {
 
     /// Refits the trees to the boxes swept from `x0` to `x1` (grown by the largest
     /// separation) and lists the point–triangle and edge–edge pairs whose boxes meet,
-    /// leaving out pairs that share a vertex.
+    /// leaving out pairs that share a vertex or hold one being untangled.
     fn candidates(&mut self, mesh: &ContactMesh, x0: &[Vec3], x1: &[Vec3]) -> Vec<Pair> {
-        let margin = self.margin(mesh);
-        let swept = |vertices: &[u32]| Aabb::around(vertices.iter().flat_map(|&k| [x0[k as usize], x1[k as usize]]));
-        mesh.triangles.par_iter().map(|t| swept(t).inflated(margin)).collect_into_vec(&mut self.triangle_boxes);
-        mesh.edges.par_iter().map(|e| swept(e).inflated(margin)).collect_into_vec(&mut self.edge_boxes);
-        self.triangle_tree.refit(&self.triangle_boxes);
-        self.edge_tree.refit(&self.edge_boxes);
+        self.refit(mesh, x0, x1);
         let (triangle_tree, edge_tree) = (&self.triangle_tree, &self.edge_tree);
+        let exempt = &self.untangler.exempt;
+        let free = |vertices: &[u32]| !vertices.iter().any(|&k| exempt[k as usize]);
         let point_pairs = (0..mesh.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).flat_map_iter(|p| {
             let mut found = Vec::new();
-            triangle_tree.query(&swept(&[p]), |t| {
-                if !mesh.triangles[t as usize].contains(&p) {
-                    found.push(t);
-                }
-            });
+            if free(&[p]) {
+                triangle_tree.query(&swept_box(&[p], x0, x1), |t| {
+                    let triangle = &mesh.triangles[t as usize];
+                    if !triangle.contains(&p) && free(triangle) {
+                        found.push(t);
+                    }
+                });
+            }
             found.sort_unstable();
             found.into_iter().map(move |t| Pair::PointTriangle(p, t))
         });
@@ -293,16 +316,29 @@ impl SelfContactSolver {
             (0..mesh.edges.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).flat_map_iter(|e| {
                 let mut found = Vec::new();
                 let [a, b] = mesh.edges[e as usize];
-                edge_tree.query(&edge_boxes[e as usize], |f| {
-                    let [c, d] = mesh.edges[f as usize];
-                    if f > e && a != c && a != d && b != c && b != d {
-                        found.push(f);
-                    }
-                });
+                if free(&[a, b]) {
+                    edge_tree.query(&edge_boxes[e as usize], |f| {
+                        let [c, d] = mesh.edges[f as usize];
+                        if f > e && a != c && a != d && b != c && b != d && free(&[c, d]) {
+                            found.push(f);
+                        }
+                    });
+                }
                 found.sort_unstable();
                 found.into_iter().map(move |f| Pair::EdgeEdge(e, f))
             });
         point_pairs.chain(edge_pairs).collect()
+    }
+
+    /// Refits the trees to the boxes of the primitives swept from `x0` to `x1`, grown by
+    /// the largest separation.
+    fn refit(&mut self, mesh: &ContactMesh, x0: &[Vec3], x1: &[Vec3]) {
+        let margin = self.margin(mesh);
+        let swept = |vertices: &[u32]| swept_box(vertices, x0, x1).inflated(margin);
+        mesh.triangles.par_iter().map(|t| swept(t)).collect_into_vec(&mut self.triangle_boxes);
+        mesh.edges.par_iter().map(|e| swept(e)).collect_into_vec(&mut self.edge_boxes);
+        self.triangle_tree.refit(&self.triangle_boxes);
+        self.edge_tree.refit(&self.edge_boxes);
     }
 
     /// Gives every zone of two or more vertices one rigid motion for the step: the
@@ -351,6 +387,11 @@ impl SelfContactSolver {
             }
         }
     }
+}
+
+/// The box around `vertices` at `x0` and at `x1`.
+fn swept_box(vertices: &[u32], x0: &[Vec3], x1: &[Vec3]) -> Aabb {
+    Aabb::around(vertices.iter().flat_map(|&k| [x0[k as usize], x1[k as usize]]))
 }
 
 fn outer(a: Vec3, b: Vec3) -> glam::Mat3 {
@@ -545,6 +586,7 @@ mod tests {
             impulse_inv_mass: vec![1.0; 8],
             half_gap: vec![0.005; 8],
             friction: vec![0.0; 8],
+            layer: vec![0; 8],
         };
         (mesh, x)
     }
@@ -629,6 +671,7 @@ mod tests {
             impulse_inv_mass: vec![1.0; x0.len()],
             half_gap: vec![0.0005; x0.len()],
             friction: vec![0.2; x0.len()],
+            layer: vec![0; x0.len()],
             triangles,
         };
         let mut v: Vec<Vec3> = (0..x0.len())

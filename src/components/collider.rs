@@ -54,4 +54,7 @@ pub struct SelfCollision {
     pub separation: f32,
     /// Coulomb friction coefficient between layers [-]; a pair uses the mean.
     pub friction: f32,
+    /// Layer number: where cloths intersect, a higher layer is untangled onto the side a
+    /// lower layer's triangle normals point to.
+    pub layer: u32,
 }

@@ -190,7 +190,7 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
         });
         let self_collision = desc
             .self_collision()
-            .map(|(separation, friction)| {
+            .map(|(separation, friction, layer)| {
                 let shortest = shortest_edge(&data.particles.rest_position, &data.triangles.indices);
                 if separation <= 0.0 || separation >= 0.5 * shortest {
                     return Err(SceneError::invalid(
@@ -202,7 +202,7 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
                         ),
                     ));
                 }
-                Ok(SelfCollision { separation, friction })
+                Ok(SelfCollision { separation, friction, layer })
             })
             .transpose()?;
         counts.cloths += 1;

@@ -242,6 +242,9 @@ pub struct SelfCollisionDesc {
     pub separation: Option<f32>,
     /// Coulomb friction between layers [-]; 0.2 when not given.
     pub friction: Option<f32>,
+    /// Layer number: where cloths start intersecting, a cloth of a higher layer is
+    /// untangled onto the side its lower neighbour's triangle normals point to (outside).
+    pub layer: u32,
 }
 
 /// Friction between layers when a scene does not give one.
@@ -296,10 +299,11 @@ impl ClothDesc {
         self.thickness.or_else(|| self.fabric.map(|f| f.measurements().thickness)).unwrap_or(DEFAULT_THICKNESS)
     }
 
-    /// The separation and friction of its self-collision, with defaults filled in.
-    pub fn self_collision(&self) -> Option<(f32, f32)> {
+    /// The separation, friction and layer of its self-collision, with defaults filled in.
+    pub fn self_collision(&self) -> Option<(f32, f32, u32)> {
         self.self_collision.map(|c| {
-            (c.separation.unwrap_or_else(|| self.contact_thickness()), c.friction.unwrap_or(DEFAULT_CLOTH_FRICTION))
+            let separation = c.separation.unwrap_or_else(|| self.contact_thickness());
+            (separation, c.friction.unwrap_or(DEFAULT_CLOTH_FRICTION), c.layer)
         })
     }
 
