@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 
 use bevy_ecs::prelude::*;
 use glam::Vec3;
+use rapier3d::prelude::PhysicsWorld;
 
 use crate::builders::pins::PinSelection;
 use crate::builders::tear::Cut;
@@ -159,3 +160,9 @@ pub struct ClothContacts {
     /// Sums over the steps of the current frame.
     pub frame: SelfContactReport,
 }
+
+/// The rigid-body world of the scene's props (rapier3d), with stand-ins for its colliders;
+/// present only when the scene has props. Stepped with the cloth, by the same step and
+/// gravity.
+#[derive(Resource, Default)]
+pub struct PropWorld(pub PhysicsWorld);

@@ -43,13 +43,17 @@ pub enum FrameSystems {
 
 /// Sets of [`SubstepSchedule`], run in this order:
 ///
-/// 1. [`SubstepSystems::Forces`]: accumulate the forces at the start of the step.
-/// 2. [`SubstepSystems::Integrate`]: advance positions and velocities by one step.
-/// 3. [`SubstepSystems::Constraints`]: hold pinned particles.
-/// 4. [`SubstepSystems::BodyContacts`]: resolve contact with the ground.
-/// 5. [`SubstepSystems::SelfContacts`]: cloth against cloth (arrives with contact work).
+/// 1. [`SubstepSystems::Props`]: advance the rigid props (rapier3d) by the step.
+/// 2. [`SubstepSystems::Forces`]: accumulate the forces at the start of the step.
+/// 3. [`SubstepSystems::Integrate`]: advance positions and velocities by one step.
+/// 4. [`SubstepSystems::Constraints`]: move grips, hold pinned particles, limit strain.
+/// 5. [`SubstepSystems::BodyContacts`]: contact with colliders, the ground and props, and
+///    the cloth's push back on the props.
+/// 6. [`SubstepSystems::SelfContacts`]: cloth against cloth.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum SubstepSystems {
+    /// Advance the rigid props.
+    Props,
     /// Accumulate forces.
     Forces,
     /// Advance the state.
@@ -110,6 +114,7 @@ pub fn build_schedules() -> SimSchedules {
     );
     schedules.substep.configure_sets(
         (
+            SubstepSystems::Props,
             SubstepSystems::Forces,
             SubstepSystems::Integrate,
             SubstepSystems::Constraints,

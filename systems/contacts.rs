@@ -1,23 +1,27 @@
 //! Contact of cloth with solid bodies and with cloth.
 
 use bevy_ecs::prelude::*;
+use glam::Vec3;
 
-use crate::collision::body_contact::{ContactBody, resolve_body_contacts};
+use crate::collision::body_contact::{BodyLoad, ContactBody, resolve_body_contacts};
 use crate::collision::self_contact::{ContactMesh, SelfContactReport, SelfContactSolver};
 use crate::components::{
-    Cloth, ClothMaterial, ClothTopology, Collider, ContactStats, Particles, SelfCollision, SolverWorkspace, Touching,
-    Triangles,
+    Cloth, ClothMaterial, ClothTopology, Collider, ContactStats, Particles, Prop, SelfCollision, SolverWorkspace,
+    Touching, Triangles,
 };
-use crate::resources::{ClothContacts, SimClock, StepSettings};
+use crate::resources::{ClothContacts, PropWorld, SimClock, StepSettings};
 use crate::schedule::{FrameSystems, SimSchedules, SubstepSystems};
 
 /// Resolves every cloth's contacts with every collider at the end of the step (the
 /// colliders where they are then), and adds what they did to the cloth's
-/// [`ContactStats`]. Runs in [`SubstepSystems::BodyContacts`].
+/// [`ContactStats`]. The props among the colliders get the opposite of the impulses they
+/// gave the cloth, at the points where they gave them. Runs in
+/// [`SubstepSystems::BodyContacts`].
 pub fn collide_with_bodies(
     clock: Res<SimClock>,
     settings: Res<StepSettings>,
-    colliders: Query<&Collider>,
+    colliders: Query<(&Collider, Option<&Prop>)>,
+    rigid: Option<ResMut<PropWorld>>,
     mut cloths: Query<(
         &Cloth,
         &ClothMaterial,
@@ -27,15 +31,19 @@ pub fn collide_with_bodies(
         &mut ContactStats,
         &mut Touching,
     )>,
+    mut loads: Local<(Vec<BodyLoad>, Vec<BodyLoad>)>,
 ) {
     if colliders.is_empty() {
         return;
     }
     let t = (clock.time_s + f64::from(settings.dt)) as f32;
+    let (cloth_loads, total) = &mut *loads;
+    total.clear();
+    total.resize(colliders.iter().len(), BodyLoad::default());
     for (cloth, material, mut particles, topology, workspace, mut stats, mut touching) in &mut cloths {
         let bodies: Vec<ContactBody<'_>> = colliders
             .iter()
-            .map(|c| ContactBody {
+            .map(|(c, _)| ContactBody {
                 shape: c.shape.as_ref(),
                 state: c.motion.state_at(t),
                 friction: c.friction,
@@ -57,8 +65,27 @@ pub fn collide_with_bodies(
             position,
             velocity,
             &mut touching.0,
+            cloth_loads,
         );
         stats.0.add(&totals);
+        for (sum, load) in total.iter_mut().zip(cloth_loads.iter()) {
+            sum.impulse += load.impulse;
+            sum.moment += load.moment;
+        }
+    }
+    let Some(mut rigid) = rigid else {
+        return;
+    };
+    for ((_, prop), load) in colliders.iter().zip(total.iter()) {
+        let Some(prop) = prop else {
+            continue;
+        };
+        let body = &mut rigid.0.bodies[prop.body];
+        if load.impulse != Vec3::ZERO || load.moment != Vec3::ZERO {
+            let centre = body.center_of_mass();
+            body.apply_impulse(-load.impulse, true);
+            body.apply_torque_impulse(-load.moment_about(centre), true);
+        }
     }
 }
 

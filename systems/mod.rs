@@ -9,6 +9,7 @@ pub mod forces;
 pub mod input;
 pub mod integrate;
 pub mod prepare;
+pub mod props;
 pub mod substeps;
 pub mod writeback;
 
@@ -19,6 +20,7 @@ pub fn add_to(schedules: &mut SimSchedules) {
     input::add_to(schedules);
     prepare::add_to(schedules);
     substeps::add_to(schedules);
+    props::add_to(schedules);
     forces::add_to(schedules);
     integrate::add_to(schedules);
     constraints::add_to(schedules);

@@ -138,3 +138,14 @@ fn response_regimes_whose_thresholds_do_not_nest_are_refused() {
     let message = error("    ],\n)", &floor("outside: 0.01, surface: 0.002, stiffness: 100.0, restitution: 1.5"));
     assert_mentions(&message, &["colliders[0].response.restitution", "between 0 and 1"]);
 }
+
+#[test]
+fn a_prop_that_is_a_plane_or_has_no_mass_is_refused() {
+    let prop = |fields: &str| format!("    ],\n    props: [(name: \"p\", {fields})],\n)");
+    let message = error("    ],\n)", &prop("shape: Plane(normal: (0.0, 1.0, 0.0)), mass: 1.0"));
+    assert_mentions(&message, &["props[0].shape", "bounded solid"]);
+    let message = error("    ],\n)", &prop("shape: Sphere(radius: 0.1), mass: 0.0"));
+    assert_mentions(&message, &["props[0].mass"]);
+    let message = error("    ],\n)", &prop("shape: Sphere(radius: -0.1), mass: 1.0"));
+    assert_mentions(&message, &["props[0].shape.radius"]);
+}

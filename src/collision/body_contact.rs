@@ -59,11 +59,35 @@ impl ContactTotals {
     }
 }
 
+/// The push of the cloth on one body over a step: what a free body needs to be moved
+/// by the cloth in turn (two-way coupling).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct BodyLoad {
+    /// Sum of the impulses the body gave the cloth [N·s]; the body gets the opposite.
+    pub impulse: Vec3,
+    /// Sum of their moments about the world origin, `Σ x × J` [N·m·s].
+    pub moment: Vec3,
+}
+
+impl BodyLoad {
+    /// The moment of the impulses about `centre` [N·m·s].
+    pub fn moment_about(&self, centre: Vec3) -> Vec3 {
+        self.moment - centre.cross(self.impulse)
+    }
+}
+
+/// A body's share of one particle's contact: the body's index and the impulse it gave.
+type Push = Option<(u32, Vec3)>;
+
 /// One particle's contact outcome, combined in particle order.
 #[derive(Debug, Clone, Copy, Default)]
 struct ParticleContact {
     totals: ContactTotals,
     touch: Option<Touch>,
+    /// Impulses from at most two bodies (a third one's adds to the second's).
+    pushes: [Push; 2],
+    /// Where the particle ended.
+    at: Vec3,
 }
 
 /// A particle touching a body at the end of a step.
@@ -75,6 +99,8 @@ pub struct Touch {
     pub normal: Vec3,
     /// The body's surface velocity there [m/s].
     pub surface_velocity: Vec3,
+    /// The body's index in the list given to [`resolve_body_contacts`].
+    pub body: u32,
 }
 
 /// Where a particle is against a body.
@@ -101,7 +127,8 @@ struct Particle<'p> {
 /// particles left touching a body are listed in `touching`, in particle order, for the
 /// next implicit step to keep them there; `support` is the impulse such a step's
 /// constraints gave each particle [N·s] (zero for explicit steps), which counts as contact
-/// force.
+/// force, given to the body the particle touched at the end of the last step (`touching`
+/// as it comes in). `loads` receives, per body, what the cloth pushed it with.
 ///
 /// A particle that moved further than the contact thickness in the step is first traced
 /// along its path (a ray from `start`): if the path enters a body, the particle is put
@@ -118,7 +145,9 @@ pub fn resolve_body_contacts(
     x: &mut [Vec3],
     v: &mut [Vec3],
     touching: &mut Vec<Touch>,
+    loads: &mut Vec<BodyLoad>,
 ) -> ContactTotals {
+    let previous: &[Touch] = touching;
     let outcomes: Vec<ParticleContact> = x
         .par_iter_mut()
         .zip(v.par_iter_mut())
@@ -131,10 +160,17 @@ pub fn resolve_body_contacts(
             }
             let before = *v;
             let mut particle = Particle { x, v, mass: 1.0 / inv_mass[i], area: area(i), support: support[i] };
-            for body in bodies {
-                let Some(near) = locate(body, start[i], particle.x) else {
+            // The body whose surface the implicit constraint held the particle on.
+            if support[i] != Vec3::ZERO
+                && let Ok(k) = previous.binary_search_by_key(&(i as u32), |t| t.particle)
+            {
+                outcome.pushes[0] = Some((previous[k].body, support[i]));
+            }
+            for (b, body) in bodies.iter().enumerate() {
+                let Some(near) = locate(body, h, start[i], particle.x) else {
                     continue;
                 };
+                let before_body = *particle.v;
                 outcome.totals.max_penetration = outcome.totals.max_penetration.max(-near.signed);
                 outcome.totals.contact_area = particle.area;
                 let touches = match body.response {
@@ -144,17 +180,38 @@ pub fn resolve_body_contacts(
                         respond_in_regimes(body, &regimes, near, &mut particle, h, &mut outcome.totals)
                     }
                 };
+                let body_index = b as u32;
                 if touches {
                     let surface_velocity = body.state.velocity_at(*particle.x);
-                    outcome.touch = Some(Touch { particle: i as u32, normal: near.outward, surface_velocity });
+                    outcome.touch =
+                        Some(Touch { particle: i as u32, normal: near.outward, surface_velocity, body: body_index });
+                }
+                let impulse = (*particle.v - before_body) * particle.mass;
+                match &mut outcome.pushes {
+                    [Some((k, total)), _] | [_, Some((k, total))] if *k == body_index => *total += impulse,
+                    [first @ None, _] => *first = Some((body_index, impulse)),
+                    [_, second @ None] => *second = Some((body_index, impulse)),
+                    [_, Some((_, total))] => *total += impulse,
                 }
             }
             outcome.totals.impulse = (*particle.v - before) * particle.mass + particle.support;
+            outcome.at = *particle.x;
             outcome
         })
         .collect();
     touching.clear();
     touching.extend(outcomes.iter().filter_map(|o| o.touch));
+    loads.clear();
+    loads.resize(bodies.len(), BodyLoad::default());
+    for outcome in &outcomes {
+        for &(body, impulse) in outcome.pushes.iter().flatten() {
+            // A touch left by a body that is no longer listed has no one to push.
+            if let Some(load) = loads.get_mut(body as usize) {
+                load.impulse += impulse;
+                load.moment += outcome.at.cross(impulse);
+            }
+        }
+    }
     outcomes.iter().fold(ContactTotals::default(), |mut totals, o| {
         totals.add(&o.totals);
         totals
@@ -163,8 +220,12 @@ pub fn resolve_body_contacts(
 
 /// Where the particle at `x` is against the body, if within the body's reach: the point
 /// its path from `start` entered the body if it crossed the surface this step (`x` is
-/// moved there and the distance is zero), else its nearest surface point.
-fn locate(body: &ContactBody<'_>, start: Vec3, x: &mut Vec3) -> Option<Proximity> {
+/// moved there and the distance is zero), else its nearest surface point. The path is
+/// taken relative to the body (its start carried along by the body's motion over the
+/// step `h`), so a body moving onto resting cloth meets it with the face it moves with,
+/// not with whichever face the cloth ends nearest.
+fn locate(body: &ContactBody<'_>, h: f32, start: Vec3, x: &mut Vec3) -> Option<Proximity> {
+    let start = start + h * body.state.velocity_at(start);
     let path = *x - start;
     let entry = (path.length() > body.thickness && !body.shape.contains_point(&body.state.pose, start))
         .then(|| {
@@ -303,7 +364,19 @@ mod tests {
     fn resolve(body: ContactBody<'_>, h: f32, start: &[Vec3], x: &mut [Vec3], v: &mut [Vec3]) -> ContactTotals {
         let ones = vec![1.0; x.len()];
         let support = vec![Vec3::ZERO; x.len()];
-        resolve_body_contacts(&[body], &ones, &ones, |_| 1.0, h, start, &support, x, v, &mut Vec::new())
+        resolve_body_contacts(
+            &[body],
+            &ones,
+            &ones,
+            |_| 1.0,
+            h,
+            start,
+            &support,
+            x,
+            v,
+            &mut Vec::new(),
+            &mut Vec::new(),
+        )
     }
 
     fn ground() -> (HalfSpace, ColliderState) {
@@ -315,8 +388,9 @@ mod tests {
         let (shape, state) = ground();
         let body =
             ContactBody { shape: &shape, state, friction: 0.5, thickness: 0.0, response: ContactResponse::Slide };
-        let mut x = [Vec3::new(0.0, -0.01, 0.0), Vec3::new(0.0, 1.0, 0.0)];
+        let mut x = [Vec3::new(0.3, -0.01, 0.0), Vec3::new(0.0, 1.0, 0.0)];
         let mut v = [Vec3::new(2.0, -1.0, 0.0), Vec3::new(0.0, -1.0, 0.0)];
+        let mut loads = Vec::new();
         let totals = resolve_body_contacts(
             &[body],
             &[2.0, 2.0],
@@ -328,6 +402,7 @@ mod tests {
             &mut x,
             &mut v,
             &mut Vec::new(),
+            &mut loads,
         );
         assert!(x[0].y.abs() < 1e-7);
         assert!((v[0] - Vec3::new(1.5, 0.0, 0.0)).length() < 1e-6);
@@ -336,6 +411,11 @@ mod tests {
         assert!((totals.impulse - Vec3::new(-0.25, 0.5, 0.0)).length() < 1e-6);
         assert!((totals.normal_impulse - 0.5).abs() < 1e-6 && (totals.friction_impulse - 0.25).abs() < 1e-6);
         assert!((totals.contact_area - 0.25).abs() < 1e-7 && (totals.max_penetration - 0.01).abs() < 1e-7);
+        // The ground's load is that impulse, applied at (0.3, 0, 0): moment x × J about the origin.
+        assert_eq!(loads.len(), 1);
+        assert!((loads[0].impulse - totals.impulse).length() < 1e-6);
+        assert!((loads[0].moment - Vec3::new(0.0, 0.0, 0.3 * 0.5)).length() < 1e-6, "{}", loads[0].moment);
+        assert!(loads[0].moment_about(Vec3::new(0.3, 0.0, 0.0)).length() < 1e-6);
     }
 
     #[test]
@@ -431,6 +511,7 @@ mod tests {
             &mut x,
             &mut v,
             &mut touching,
+            &mut Vec::new(),
         );
         // v = C_fric v_t − C_refl v_n, then the penalty 100 × 9 mm over 10 ms (backward Euler).
         assert!((v[0] - Vec3::new(0.5, 0.1 + 0.009 / 1.01, 0.0)).length() < 1e-6, "{}", v[0]);

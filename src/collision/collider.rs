@@ -173,10 +173,13 @@ pub enum ColliderMotion {
     /// Piecewise linear in translation and spherical-linear in rotation between keyframes
     /// `(time [s], pose)`, sorted by time; before the first and after the last it rests.
     Keyframes(Vec<(f32, Pose)>),
+    /// Moved by another simulation (a rigid prop): its state as that simulation last set
+    /// it, whatever the time asked.
+    Driven(ColliderState),
 }
 
 /// Where a collider is at an instant and how its surface moves.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ColliderState {
     /// Pose.
     pub pose: Pose3,
@@ -187,6 +190,12 @@ pub struct ColliderState {
 }
 
 impl ColliderState {
+    /// The state of a rapier body now.
+    pub fn of_body(body: &rapier3d::prelude::RigidBody) -> ColliderState {
+        let pose = *body.position();
+        ColliderState { pose, linear: body.velocity_at_point(pose.translation), angular: body.angvel() }
+    }
+
     /// Velocity of the collider's material at world point `p` [m/s].
     pub fn velocity_at(&self, p: Vec3) -> Vec3 {
         self.linear + self.angular.cross(p - self.pose.translation)
@@ -200,6 +209,7 @@ impl ColliderMotion {
             ColliderMotion::Static(pose) => {
                 ColliderState { pose: pose.to_pose3(), linear: Vec3::ZERO, angular: Vec3::ZERO }
             }
+            ColliderMotion::Driven(state) => *state,
             ColliderMotion::Keyframes(keys) => {
                 let rest =
                     |pose: &Pose| ColliderState { pose: pose.to_pose3(), linear: Vec3::ZERO, angular: Vec3::ZERO };

@@ -4,6 +4,7 @@ use std::path::Path;
 
 use bevy_ecs::prelude::*;
 use glam::Vec3;
+use rapier3d::prelude::{ColliderBuilder, PhysicsWorld, RigidBodyBuilder};
 
 use super::format::{ClothDesc, EditActionDesc, LimitedEdgesDesc, RayleighDesc, Scene, ShapeDesc};
 use super::load::SceneError;
@@ -15,14 +16,14 @@ use crate::builders::mesh::{build_from_mesh, read_obj};
 use crate::builders::pins::PinSelection;
 use crate::builders::surface::limited_edges;
 use crate::builders::tear::Cut;
-use crate::collision::collider::{ColliderMotion, ColliderShape, ContactResponse, Pose};
+use crate::collision::collider::{ColliderMotion, ColliderShape, ColliderState, ContactResponse, Pose};
 use crate::components::{
-    Cloth, ClothTopology, Collider, ContactStats, Grip, Grips, Pins, RenderMesh, SelfCollision, SolverWorkspace,
-    StrainLimit, Touching, UserForces,
+    Cloth, ClothTopology, Collider, ContactStats, Grip, Grips, Pins, Prop, RenderMesh, RigidStandIn, SelfCollision,
+    SolverWorkspace, StrainLimit, Touching, UserForces,
 };
 use crate::resources::{
     AirSettings, ClothContacts, DivergenceLimit, EditAction, Gravity, HealthReport, IntegratorStats, ProbeRequests,
-    Probes, ScheduledEdit, ScheduledEdits, SimClock, SolverSettings, StepSettings,
+    Probes, PropWorld, ScheduledEdit, ScheduledEdits, SimClock, SolverSettings, StepSettings,
 };
 use crate::solver::forces::{Air, Gust};
 use crate::solver::implicit::{ImplicitSettings, Rayleigh};
@@ -126,6 +127,50 @@ fn spawn_colliders(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
             response: desc.response,
         });
     }
+    if !scene.props.is_empty() {
+        spawn_props(world, scene)?;
+    }
+    Ok(())
+}
+
+/// Spawns the scene's rigid props in a new [`PropWorld`], with a fixed or kinematic
+/// stand-in there for every collider so that props land on them.
+fn spawn_props(world: &mut World, scene: &Scene) -> Result<(), SceneError> {
+    let mut rigid = PhysicsWorld::new();
+    let mut colliders = world.query::<(Entity, &Collider)>();
+    let stand_ins: Vec<(Entity, Collider)> = colliders.iter(world).map(|(e, c)| (e, c.clone())).collect();
+    for (entity, collider) in stand_ins {
+        let builder = match &collider.motion {
+            ColliderMotion::Keyframes(_) => RigidBodyBuilder::kinematic_position_based(),
+            ColliderMotion::Static(_) | ColliderMotion::Driven(_) => RigidBodyBuilder::fixed(),
+        };
+        let body = rigid.bodies.insert(builder.pose(collider.motion.state_at(0.0).pose).build());
+        let shape = ColliderBuilder::new(collider.shape.clone()).friction(collider.friction).build();
+        rigid.colliders.insert_with_parent(shape, body, &mut rigid.bodies);
+        world.entity_mut(entity).insert(RigidStandIn { body });
+    }
+    for (k, desc) in scene.props.iter().enumerate() {
+        let field = format!("props[{k}].shape");
+        let shape = desc.shape.build(None).map_err(|e| SceneError::invalid(&field, e.to_string()))?;
+        let mut body =
+            RigidBodyBuilder::dynamic().pose(desc.pose.to_pose3()).linvel(desc.velocity).ccd_enabled(true).build();
+        body.add_force(desc.force, true);
+        let body = rigid.bodies.insert(body);
+        let collider = ColliderBuilder::new(shape.clone()).mass(desc.mass).friction(desc.friction).build();
+        rigid.colliders.insert_with_parent(collider, body, &mut rigid.bodies);
+        world.spawn((
+            Collider {
+                name: desc.name.clone(),
+                shape,
+                motion: ColliderMotion::Driven(ColliderState::of_body(&rigid.bodies[body])),
+                friction: desc.friction,
+                thickness: desc.thickness,
+                response: ContactResponse::Slide,
+            },
+            Prop { body },
+        ));
+    }
+    world.insert_resource(PropWorld(rigid));
     Ok(())
 }
 

@@ -37,6 +37,10 @@ pub struct Scene {
     /// Solid bodies: static, or moving along keyframes.
     #[serde(default)]
     pub colliders: Vec<ColliderDesc>,
+    /// Rigid props (rapier3d): free bodies that cloth and colliders push, and that push
+    /// cloth in turn.
+    #[serde(default)]
+    pub props: Vec<PropDesc>,
     /// What to write.
     #[serde(default)]
     pub output: OutputDesc,
@@ -375,6 +379,35 @@ pub struct ColliderDesc {
     /// How cloth responds to touching it.
     #[serde(default)]
     pub response: ContactResponse,
+}
+
+/// A free rigid body (E5), simulated by rapier3d with the scene's gravity and step, coupled
+/// both ways with cloth: contact pushes cloth out of it, and the opposite impulses move it.
+/// It also collides with the colliders, the ground and other props.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PropDesc {
+    /// Unique name among colliders and props.
+    pub name: String,
+    /// A bounded shape: not a plane; a mesh only if closed.
+    pub shape: ColliderShape,
+    /// Where it starts.
+    #[serde(default)]
+    pub pose: Pose,
+    /// Mass [kg]; the inertia is the shape's, uniformly filled.
+    pub mass: f32,
+    /// Initial velocity of its centre of mass [m/s].
+    #[serde(default)]
+    pub velocity: Vec3,
+    /// A constant force on its centre of mass besides gravity, such as a pull [N].
+    #[serde(default)]
+    pub force: Vec3,
+    /// Coulomb friction coefficient against cloth and other bodies [-].
+    #[serde(default = "default_friction")]
+    pub friction: f32,
+    /// Extra distance cloth keeps from its surface [m].
+    #[serde(default)]
+    pub thickness: f32,
 }
 
 fn default_friction() -> f32 {

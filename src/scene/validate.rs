@@ -288,33 +288,27 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         if let ContactResponse::Regimes(regimes) = &collider.response {
             check_regimes(&field("response"), regimes)?;
         }
-        match &collider.shape {
-            ColliderShape::Plane { normal } => {
-                nonzero_vec(&field("shape.normal"), *normal)?;
-            }
-            ColliderShape::Sphere { radius } => {
-                positive(&field("shape.radius"), *radius)?;
-            }
-            ColliderShape::Capsule { half_height, radius } | ColliderShape::Cylinder { half_height, radius } => {
-                positive(&field("shape.half_height"), *half_height)?;
-                positive(&field("shape.radius"), *radius)?;
-            }
-            ColliderShape::Cuboid { half_extents } => {
-                if !(finite_vec(&field("shape.half_extents"), *half_extents)?.cmpgt(Vec3::ZERO).all()) {
-                    return Err(SceneError::invalid(field("shape.half_extents"), "every half extent must be positive"));
-                }
-            }
-            ColliderShape::ConvexHull { points } => {
-                for point in points {
-                    finite_vec(&field("shape.points"), *point)?;
-                }
-            }
-            ColliderShape::Mesh { path } => {
-                if path.is_empty() {
-                    return Err(SceneError::invalid(field("shape.path"), "must name an OBJ file"));
-                }
-            }
+        check_shape(&field("shape"), &collider.shape)?;
+    }
+    for (k, prop) in scene.props.iter().enumerate() {
+        let field = |name: &str| format!("props[{k}].{name}");
+        let taken = scene.colliders.iter().map(|c| &c.name).chain(scene.props[..k].iter().map(|p| &p.name));
+        if prop.name.is_empty() || taken.into_iter().any(|name| *name == prop.name) {
+            return Err(SceneError::invalid(field("name"), "prop names must be unique among colliders and props"));
         }
+        if matches!(prop.shape, ColliderShape::Plane { .. } | ColliderShape::Mesh { .. }) {
+            return Err(SceneError::invalid(
+                field("shape"),
+                "a prop must be a bounded solid: a Sphere, Capsule, Cuboid, Cylinder or ConvexHull",
+            ));
+        }
+        check_shape(&field("shape"), &prop.shape)?;
+        positive(&field("mass"), prop.mass)?;
+        non_negative(&field("friction"), prop.friction)?;
+        non_negative(&field("thickness"), prop.thickness)?;
+        check_pose(&field("pose"), &prop.pose)?;
+        finite_vec(&field("velocity"), prop.velocity)?;
+        finite_vec(&field("force"), prop.force)?;
     }
     finite("ground.height", scene.ground.height)?;
     non_negative("ground.friction", scene.ground.friction)?;
@@ -395,6 +389,39 @@ fn check_fabric(field: &str, fabric: &FabricDesc) -> Result<(), SceneError> {
         && !(0.0..0.5).contains(&nu)
     {
         return Err(SceneError::invalid(at("poisson"), format!("{nu} is outside [0, 0.5)")));
+    }
+    Ok(())
+}
+
+/// A shape's dimensions must be positive and finite.
+fn check_shape(field: &str, shape: &ColliderShape) -> Result<(), SceneError> {
+    let field = |name: &str| format!("{field}.{name}");
+    match shape {
+        ColliderShape::Plane { normal } => {
+            nonzero_vec(&field("normal"), *normal)?;
+        }
+        ColliderShape::Sphere { radius } => {
+            positive(&field("radius"), *radius)?;
+        }
+        ColliderShape::Capsule { half_height, radius } | ColliderShape::Cylinder { half_height, radius } => {
+            positive(&field("half_height"), *half_height)?;
+            positive(&field("radius"), *radius)?;
+        }
+        ColliderShape::Cuboid { half_extents } => {
+            if !(finite_vec(&field("half_extents"), *half_extents)?.cmpgt(Vec3::ZERO).all()) {
+                return Err(SceneError::invalid(field("half_extents"), "every half extent must be positive"));
+            }
+        }
+        ColliderShape::ConvexHull { points } => {
+            for point in points {
+                finite_vec(&field("points"), *point)?;
+            }
+        }
+        ColliderShape::Mesh { path } => {
+            if path.is_empty() {
+                return Err(SceneError::invalid(field("path"), "must name an OBJ file"));
+            }
+        }
     }
     Ok(())
 }
