@@ -69,8 +69,7 @@ pub fn collide_with_bodies(
         );
         stats.0.add(&totals);
         for (sum, load) in total.iter_mut().zip(cloth_loads.iter()) {
-            sum.impulse += load.impulse;
-            sum.moment += load.moment;
+            sum.add(load);
         }
     }
     let Some(mut rigid) = rigid else {

@@ -70,6 +70,17 @@ pub struct BodyLoad {
 }
 
 impl BodyLoad {
+    /// The load of `impulse` given at `at`.
+    pub fn at(at: Vec3, impulse: Vec3) -> BodyLoad {
+        BodyLoad { impulse, moment: at.cross(impulse) }
+    }
+
+    /// Adds `other`'s impulses and moments to these.
+    pub fn add(&mut self, other: &BodyLoad) {
+        self.impulse += other.impulse;
+        self.moment += other.moment;
+    }
+
     /// The moment of the impulses about `centre` [N·m·s].
     pub fn moment_about(&self, centre: Vec3) -> Vec3 {
         self.moment - centre.cross(self.impulse)
@@ -207,8 +218,7 @@ pub fn resolve_body_contacts(
         for &(body, impulse) in outcome.pushes.iter().flatten() {
             // A touch left by a body that is no longer listed has no one to push.
             if let Some(load) = loads.get_mut(body as usize) {
-                load.impulse += impulse;
-                load.moment += outcome.at.cross(impulse);
+                load.add(&BodyLoad::at(outcome.at, impulse));
             }
         }
     }
@@ -251,15 +261,22 @@ fn locate(body: &ContactBody<'_>, h: f32, start: Vec3, x: &mut Vec3) -> Option<P
     Some(Proximity { signed, outward })
 }
 
+/// Moves a particle closer to the body than the contact thickness out to it along the
+/// normal, and returns the body's surface velocity there and the particle's velocity
+/// relative to it.
+fn put_back(body: &ContactBody<'_>, near: Proximity, p: &mut Particle<'_>) -> (Vec3, Vec3) {
+    *p.x += (body.thickness - near.signed).max(0.0) * near.outward;
+    let surface = body.state.velocity_at(*p.x);
+    (surface, *p.v - surface)
+}
+
 /// Zheng's response: put back at the contact thickness, the approach velocity relative to
 /// the surface removed, and Coulomb friction bounded by μ times the velocity removed (to
 /// zero if that suffices: sticking). Friction also takes back the sliding the step made
 /// (`Δx = h Δv_t`), so a sticking particle does not creep by `h² g sin θ` a step.
 fn slide(body: &ContactBody<'_>, near: Proximity, p: &mut Particle<'_>, h: f32, totals: &mut ContactTotals) -> bool {
     let outward = near.outward;
-    *p.x += (body.thickness - near.signed) * outward;
-    let surface = body.state.velocity_at(*p.x);
-    let relative = *p.v - surface;
+    let (surface, relative) = put_back(body, near, p);
     let approach = relative.dot(outward);
     // What an implicit solve's constraint pushed along the normal counts as contact force
     // (signed: its pulls cancel its pushes across the cloth).
@@ -289,9 +306,7 @@ fn slide(body: &ContactBody<'_>, near: Proximity, p: &mut Particle<'_>, h: f32, 
 /// motion relative to the body taken back, and moving with the body from then on.
 fn stick(body: &ContactBody<'_>, near: Proximity, p: &mut Particle<'_>, h: f32, totals: &mut ContactTotals) -> bool {
     let outward = near.outward;
-    *p.x += (body.thickness - near.signed) * outward;
-    let surface = body.state.velocity_at(*p.x);
-    let relative = *p.v - surface;
+    let (surface, relative) = put_back(body, near, p);
     let approach = relative.dot(outward);
     let tangential = relative - approach * outward;
     *p.x -= h * tangential;
@@ -316,14 +331,9 @@ fn respond_in_regimes(
     totals: &mut ContactTotals,
 ) -> bool {
     let outward = near.outward;
-    let depth_below_surface = body.thickness - near.signed;
-    let interference = depth_below_surface >= 0.0;
-    if interference {
-        *p.x += depth_below_surface * outward;
-    }
+    let interference = near.signed <= body.thickness;
     let distance = (near.signed - body.thickness).max(0.0);
-    let surface = body.state.velocity_at(*p.x);
-    let relative = *p.v - surface;
+    let (surface, relative) = put_back(body, near, p);
     let approach = relative.dot(outward);
     let before = *p.v;
     let corrected = distance < regimes.surface;

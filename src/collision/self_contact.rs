@@ -188,10 +188,11 @@ impl SelfContactSolver {
         if mesh.triangles.is_empty() || h <= 0.0 {
             return report;
         }
-        self.untangler.clear(mesh.len());
         if self.untangler.watching() {
             self.refit(mesh, x0, x1);
             report.crossings = self.untangler.run(mesh, &self.triangle_tree, h, x0, x1, v);
+        } else {
+            self.untangler.clear(mesh.len());
         }
         self.mean_velocity.clear();
         self.mean_velocity.extend(x0.iter().zip(x1.iter()).map(|(a, b)| (*b - *a) / h));
