@@ -1,26 +1,28 @@
 //! Contact of cloth with solid bodies and with cloth.
 
 use bevy_ecs::prelude::*;
-use glam::Vec3;
+use glam::{Mat3, Vec3};
 
 use crate::collision::body_contact::{BodyLoad, ContactBody, resolve_body_contacts};
+use crate::collision::coupling::{ApparentInertia, StepSystem, add_apparent_inertia};
 use crate::collision::self_contact::{ContactMesh, SelfContactReport, SelfContactSolver};
 use crate::components::{
     Cloth, ClothMaterial, ClothTopology, Collider, ContactStats, Particles, Prop, SelfCollision, SolverWorkspace,
     Touching, Triangles,
 };
-use crate::resources::{ClothContacts, PropWorld, SimClock, StepSettings};
+use crate::resources::{ClothContacts, PropWorld, SimClock, SolverSettings, StepSettings};
 use crate::schedule::{FrameSystems, SimSchedules, SubstepSystems};
 
 /// Resolves every cloth's contacts with every collider at the end of the step (the
 /// colliders where they are then), and adds what they did to the cloth's
-/// [`ContactStats`]. The props among the colliders get the opposite of the impulses they
-/// gave the cloth, at the points where they gave them. Runs in
-/// [`SubstepSystems::BodyContacts`].
+/// [`ContactStats`]. The props among the colliders take the opposite of the impulses they
+/// gave the cloth, at the points where they gave them, through the cloth's apparent
+/// inertia ([`crate::collision::coupling`]). Runs in [`SubstepSystems::BodyContacts`].
 pub fn collide_with_bodies(
     clock: Res<SimClock>,
     settings: Res<StepSettings>,
-    colliders: Query<(&Collider, Option<&Prop>)>,
+    solver: Res<SolverSettings>,
+    mut colliders: Query<(&Collider, Option<&mut Prop>)>,
     rigid: Option<ResMut<PropWorld>>,
     mut cloths: Query<(
         &Cloth,
@@ -31,15 +33,20 @@ pub fn collide_with_bodies(
         &mut ContactStats,
         &mut Touching,
     )>,
-    mut loads: Local<(Vec<BodyLoad>, Vec<BodyLoad>)>,
+    mut sums: Local<(Vec<BodyLoad>, Vec<BodyLoad>, Vec<ApparentInertia>)>,
 ) {
     if colliders.is_empty() {
         return;
     }
     let t = (clock.time_s + f64::from(settings.dt)) as f32;
-    let (cloth_loads, total) = &mut *loads;
+    let (cloth_loads, total, inertia) = &mut *sums;
     total.clear();
     total.resize(colliders.iter().len(), BodyLoad::default());
+    inertia.clear();
+    inertia.resize(total.len(), ApparentInertia::default());
+    // The free bodies' centres of mass, about which their apparent inertia is taken.
+    let centres: Vec<Option<Vec3>> =
+        colliders.iter().map(|(_, prop)| Some(rigid.as_ref()?.0.bodies[prop?.body].center_of_mass())).collect();
     for (cloth, material, mut particles, topology, workspace, mut stats, mut touching) in &mut cloths {
         let bodies: Vec<ContactBody<'_>> = colliders
             .iter()
@@ -71,19 +78,31 @@ pub fn collide_with_bodies(
         for (sum, load) in total.iter_mut().zip(cloth_loads.iter()) {
             sum.add(load);
         }
+        let matrix = workspace.integrator.implicit.system();
+        let system = (solver.integrator.is_implicit() && matrix.blocks.len() == topology.pattern.columns.len())
+            .then_some(StepSystem { pattern: &topology.pattern, matrix });
+        add_apparent_inertia(&touching.0, system, inv_mass, position, &centres, inertia);
     }
     let Some(mut rigid) = rigid else {
         return;
     };
-    for ((_, prop), load) in colliders.iter().zip(total.iter()) {
-        let Some(prop) = prop else {
+    for (((_, prop), load), inertia) in colliders.iter_mut().zip(total.iter()).zip(inertia.iter()) {
+        let Some(mut prop) = prop else {
             continue;
         };
         let body = &mut rigid.0.bodies[prop.body];
-        if load.impulse != Vec3::ZERO || load.moment != Vec3::ZERO {
-            let centre = body.center_of_mass();
-            body.apply_impulse(-load.impulse, true);
-            body.apply_torque_impulse(-load.moment_about(centre), true);
+        let properties = body.mass_properties();
+        let (dv, dw) = prop.coupling.velocity_change(
+            load.impulse,
+            load.moment_about(properties.world_com),
+            properties.effective_inv_mass,
+            properties.effective_world_inv_inertia.mul_mat(Mat3::IDENTITY),
+            inertia,
+        );
+        if dv != Vec3::ZERO || dw != Vec3::ZERO {
+            let (linear, angular) = (body.linvel() + dv, body.angvel() + dw);
+            body.set_linvel(linear, true);
+            body.set_angvel(angular, true);
         }
     }
 }

@@ -1,7 +1,8 @@
 //! Rigid props (E5): the rapier3d world advances by each cloth step, before the cloth, and
 //! the props' colliders take the bodies' new states; cloth contact then pushes the bodies
-//! back (see [`super::contacts::collide_with_bodies`]). The coupling is staggered: a prop
-//! feels the cloth's push of one step in its motion of the next.
+//! back (see [`super::contacts::collide_with_bodies`]). The coupling is staggered, a prop
+//! feeling the cloth's push of one step in its motion of the next, and stabilised by the
+//! cloth's apparent inertia (see [`crate::collision::coupling`]).
 
 use bevy_ecs::prelude::*;
 
@@ -19,7 +20,7 @@ pub fn step_props(
     gravity: Res<Gravity>,
     rigid: Option<ResMut<PropWorld>>,
     stand_ins: Query<(&Collider, &RigidStandIn), Without<Prop>>,
-    mut props: Query<(&mut Collider, &Prop)>,
+    mut props: Query<(&mut Collider, &mut Prop)>,
 ) {
     let Some(mut rigid) = rigid else {
         return;
@@ -31,11 +32,18 @@ pub fn step_props(
             rigid.bodies[stand_in.body].set_next_kinematic_position(collider.motion.state_at(t).pose);
         }
     }
+    for (_, mut prop) in &mut props {
+        let body = &rigid.bodies[prop.body];
+        prop.coupling.rigid_change = (body.linvel(), body.angvel());
+    }
     rigid.gravity = gravity.0;
     rigid.integration_parameters.dt = settings.dt;
     rigid.step();
-    for (mut collider, prop) in &mut props {
-        collider.motion = ColliderMotion::Driven(ColliderState::of_body(&rigid.bodies[prop.body]));
+    for (mut collider, mut prop) in &mut props {
+        let body = &rigid.bodies[prop.body];
+        collider.motion = ColliderMotion::Driven(ColliderState::of_body(body));
+        let (linear, angular) = prop.coupling.rigid_change;
+        prop.coupling.rigid_change = (body.linvel() - linear, body.angvel() - angular);
     }
 }
 

@@ -1,43 +1,79 @@
-//! Rigid props coupled both ways with cloth (E5): a light ball dropped on a hammock sinks
-//! into it and rests, and the pins then carry the weight of cloth and ball together, which
-//! they can only do if the cloth's push on the ball and the ball's on the cloth balance.
+//! Rigid props coupled both ways with cloth (E5). A light ball dropped on a hammock sinks
+//! into it and rests, and the pins then carry the weight of cloth and prop
+//! together, which they can only do if the cloth's push on the prop and the prop's on the
+//! cloth balance. A ball pulled through a hanging sheet drags it along, and its momentum
+//! is the pull's impulse less what it gave the cloth.
 
 mod common;
 
 use glam::Vec3;
 use selvedge::Simulation;
-use selvedge::collision::collider::ColliderMotion;
-use selvedge::components::{Collider, Prop};
+use selvedge::collision::collider::{ColliderMotion, ColliderState};
+use selvedge::components::{Collider, ContactStats, Particles, Prop};
 
-/// The prop's centre.
-fn prop_centre(sim: &mut Simulation) -> Vec3 {
+/// The prop's state.
+fn prop_state(sim: &mut Simulation) -> ColliderState {
     let world = sim.world_mut();
     let mut query = world.query::<(&Collider, &Prop)>();
     let (collider, _) = query.single(world).expect("one prop");
     match collider.motion {
-        ColliderMotion::Driven(state) => state.pose.translation,
+        ColliderMotion::Driven(state) => state,
         _ => panic!("a prop's collider is driven by its body"),
     }
 }
 
-#[test]
-fn a_light_ball_sinks_into_a_hammock_and_rests_there() {
-    let mut sim = common::bundled("prop_hammock.ron");
-    let weight = (0.2 * 1.0 * 0.6 + 0.15) * 9.81;
-    common::run_frames(&mut sim, 150);
-    let settled = prop_centre(&mut sim);
+/// Drops the prop of `scene` (mass `mass`, lowest point `below` its centre) on the 0.12 kg
+/// hammock, and checks it rests sunk into it after `settle` frames, with the pins carrying
+/// both over the next half second.
+fn sinks_into_the_hammock_and_rests(scene: &str, mass: f64, below: f32, settle: u32) {
+    let mut sim = common::bundled(scene);
+    let weight = (0.2 * 1.0 * 0.6 + mass) * 9.81;
+    common::run_frames(&mut sim, settle);
+    let settled = prop_state(&mut sim).pose.translation;
     let mut pins = 0.0;
     for _ in 0..30 {
         common::run_frames(&mut sim, 1);
         pins += common::probe(&sim, "pin_force_n") / 30.0;
-        assert!(common::probe(&sim, "max_penetration_m") <= 0.002, "the ball stays out of the cloth's thickness");
+        assert!(common::probe(&sim, "max_penetration_m") <= 0.002, "the prop stays out of the cloth's thickness");
     }
-    let end = prop_centre(&mut sim);
-    assert!((pins - weight).abs() < 0.02 * weight, "pins carry {pins} N, cloth and ball weigh {weight} N");
-    assert!(end.y - 0.1 < 0.95, "the ball sank into the hammock: its bottom is at {} m", end.y - 0.1);
+    let end = prop_state(&mut sim).pose.translation;
+    assert!((pins - weight).abs() < 0.02 * weight, "pins carry {pins} N, cloth and prop weigh {weight} N");
+    assert!(end.y - below < 0.95, "the prop sank into the hammock: its bottom is at {} m", end.y - below);
     assert!(
         (end - settled).length() < 0.002,
         "and rests: it moved {} m in the last half second",
         (end - settled).length()
     );
+}
+
+#[test]
+fn a_light_ball_sinks_into_a_hammock_and_rests_there() {
+    sinks_into_the_hammock_and_rests("prop_hammock.ron", 0.15, 0.1, 150);
+}
+
+#[test]
+fn a_ball_pulled_through_a_hanging_sheet_drags_it_and_momentum_balances() {
+    let mut sim = common::bundled("prop_pull.ron");
+    let (mass, pull, frames) = (0.2, 1.5, 90);
+    let start = prop_state(&mut sim).pose.translation;
+    let mut given = Vec3::ZERO;
+    let mut furthest = f32::MIN;
+    for _ in 0..frames {
+        common::run_frames(&mut sim, 1);
+        assert!(common::probe(&sim, "max_penetration_m") <= 0.002, "the ball stays out of the cloth's thickness");
+        let world = sim.world_mut();
+        let mut cloth = world.query::<(&Particles, &ContactStats)>();
+        let (particles, stats) = cloth.single(world).expect("one cloth");
+        given += stats.0.impulse;
+        let centroid = particles.position.iter().sum::<Vec3>() / particles.len() as f32;
+        furthest = furthest.max(centroid.z);
+    }
+    let end = prop_state(&mut sim);
+    let impulse = pull * f64::from(frames) / 60.0;
+    // Along the pull only the pull and the cloth act on the ball (its weight is borne).
+    let momentum = mass * f64::from(end.linear.z) + f64::from(given.z);
+    assert!((momentum - impulse).abs() < 0.005 * impulse, "ball + cloth momentum {momentum} N·s, pull {impulse} N·s");
+    assert!(f64::from(given.z) > 0.1 * impulse, "the cloth took {} N·s of the ball's momentum", given.z);
+    assert!(furthest > 0.2, "the sheet was dragged {furthest} m along the pull");
+    assert!(end.pose.translation.z - start.z > 2.0, "the ball came out on the far side");
 }

@@ -17,6 +17,7 @@ use crate::builders::pins::PinSelection;
 use crate::builders::surface::limited_edges;
 use crate::builders::tear::Cut;
 use crate::collision::collider::{ColliderMotion, ColliderShape, ColliderState, ContactResponse, Pose};
+use crate::collision::coupling::BodyCoupling;
 use crate::components::{
     Cloth, ClothTopology, Collider, ContactStats, Grip, Grips, Pins, Prop, RenderMesh, RigidStandIn, SelfCollision,
     SolverWorkspace, StrainLimit, Touching, UserForces,
@@ -167,7 +168,7 @@ fn spawn_props(world: &mut World, scene: &Scene) -> Result<(), SceneError> {
                 thickness: desc.thickness,
                 response: ContactResponse::Slide,
             },
-            Prop { body },
+            Prop { body, coupling: BodyCoupling::default() },
         ));
     }
     world.insert_resource(PropWorld(rigid));

@@ -110,6 +110,13 @@ pub struct ImplicitWorkspace {
     pub constraint_impulses: Vec<Vec3>,
 }
 
+impl ImplicitWorkspace {
+    /// The system matrix `A` of the last Newton iteration (empty before the first step).
+    pub fn system(&self) -> &BlockMatrix {
+        &self.system
+    }
+}
+
 /// A particle touching a body: in the implicit solve its velocity along `normal` is set to
 /// `normal_velocity` [m/s] (the body's), the rest left to the solve — Baraff & Witkin's
 /// constraint by filtering, so that the solver, not a projection after it, keeps cloth
