@@ -160,3 +160,30 @@ fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
     }
     found
 }
+
+#[test]
+fn bench_times_the_named_scenes_and_writes_their_table_as_json() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("bench.json");
+    let output = selvedge(&["bench", "--quick", "--only", "hang_32", "--out", out.to_str().expect("utf-8 path")]);
+    assert!(output.status.success(), "{}", text(&output.stderr));
+    assert!(text(&output.stdout).contains("hang_32"), "the table names the scene");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).expect("report written")).expect("json");
+    let scenes = report["scenes"].as_array().expect("a list of scenes");
+    assert_eq!(scenes.len(), 1);
+    let hang = &scenes[0];
+    // The scene as issue 5 defines it: 32 × 32 particles, each quad split in two, at one
+    // implicit step per frame.
+    assert_eq!((hang["scene"].as_str(), hang["status"].as_str()), (Some("hang_32"), Some("completed")));
+    assert_eq!((hang["particles"].as_u64(), hang["triangles"].as_u64()), (Some(1024), Some(2 * 31 * 31)));
+    assert_eq!(hang["timed_frames"], 10);
+    for field in ["ms_per_frame", "realtime_factor", "particle_iterations_per_s", "iterations_per_frame"] {
+        assert!(hang[field].as_f64().expect("a number") > 0.0, "{field}");
+    }
+    assert!(hang["max_strain"].as_f64().expect("a number") < 0.1, "the cloth hangs, it does not tear");
+
+    let unknown = selvedge(&["bench", "--quick", "--only", "hang_33"]);
+    assert_eq!(unknown.status.code(), Some(2));
+    assert!(text(&unknown.stderr).contains("no bench scene hang_33"), "{}", text(&unknown.stderr));
+}

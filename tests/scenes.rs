@@ -3,7 +3,9 @@
 
 use std::path::{Path, PathBuf};
 
+use glam::Vec3;
 use selvedge::Simulation;
+use selvedge::components::{Particles, Pins};
 use selvedge::scene::load::scene_to_ron;
 use selvedge::scene::{load_scene, parse_scene};
 
@@ -28,7 +30,8 @@ fn bundled_scenes() -> Vec<PathBuf> {
 fn the_required_scenes_are_bundled() {
     let names: Vec<String> =
         bundled_scenes().iter().map(|p| p.file_name().expect("a file").to_string_lossy().into_owned()).collect();
-    for required in ["hang.ron", "flag.ron", "free_fall.ron"] {
+    let bench = ["hang_32.ron", "hang_64.ron", "hang_128.ron", "hang_256.ron", "sphere_64.ron", "fold_64.ron"];
+    for required in ["hang.ron", "flag.ron", "free_fall.ron"].into_iter().chain(bench) {
         assert!(names.iter().any(|n| n == required), "scenes/{required} is missing; found {names:?}");
     }
 }
@@ -54,5 +57,30 @@ fn every_bundled_scene_runs_its_first_frames_without_diverging() {
         for _ in 0..5 {
             simulation.step_frame().unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         }
+    }
+}
+
+#[test]
+fn the_hang_bench_scenes_are_built_as_issue_5_defines_them() {
+    // A 1 m square of N × N particles flat at y = 1 m, x ∈ [−0.5, 0.5], z ∈ [0, 1], held
+    // by the two corners on the edge z = 0, with 0.2 kg/m² of mass.
+    for n in [32, 64, 128, 256] {
+        let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/bench/hang_{n}.ron"));
+        let file = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+        let mut simulation = Simulation::from_file(&file).unwrap_or_else(|e| panic!("{e}"));
+        let world = simulation.world_mut();
+        let (particles, pins) =
+            world.query::<(&Particles, &Pins)>().single(world).unwrap_or_else(|e| panic!("one cloth: {e}"));
+        assert_eq!(particles.len(), n * n);
+        let (min, max) = particles.position.iter().fold((Vec3::MAX, Vec3::MIN), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+        assert!(min.abs_diff_eq(Vec3::new(-0.5, 1.0, 0.0), 1e-5) && max.abs_diff_eq(Vec3::new(0.5, 1.0, 1.0), 1e-5));
+        let mass: f64 = particles.inv_mass.iter().map(|w| 1.0 / f64::from(*w)).sum();
+        assert!((mass - 0.2).abs() < 1e-6, "hang_{n} weighs {mass} kg");
+        let mut held = pins.targets.clone();
+        held.sort_by(|a, b| a.x.total_cmp(&b.x));
+        assert_eq!(held.len(), 2);
+        assert!(
+            held[0].abs_diff_eq(Vec3::new(-0.5, 1.0, 0.0), 1e-5) && held[1].abs_diff_eq(Vec3::new(0.5, 1.0, 0.0), 1e-5)
+        );
     }
 }

@@ -1,5 +1,6 @@
-//! The `selvedge` command: `run` a scene, `check` a scene.
+//! The `selvedge` command: `run` a scene, `check` a scene, `bench` the benchmark scenes.
 
+mod bench;
 mod check;
 mod run;
 
@@ -46,6 +47,22 @@ pub enum Command {
         /// The scene file (RON).
         scene: PathBuf,
     },
+    /// Time the benchmark scenes of scenes/bench/ and print a table (ms per frame is the
+    /// median of the frames after a warm-up).
+    Bench {
+        /// Time 10 frames of each scene instead of the whole scene.
+        #[arg(long)]
+        quick: bool,
+        /// Also write the table as JSON to this file.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Threads of the parallel loops [default: one per core].
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Only these scenes (comma-separated names, such as hang_64,sphere_64).
+        #[arg(long, value_delimiter = ',')]
+        only: Vec<String>,
+    },
 }
 
 /// Entry point of the binary: parses arguments, runs the command, maps failures to exit
@@ -55,6 +72,7 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run { scene, out, frames, quiet } => run::run(&scene, out, frames, quiet),
         Command::Check { scene } => check::check(&scene),
+        Command::Bench { quick, out, threads, only } => bench::bench(quick, out, threads, &only),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

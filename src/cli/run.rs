@@ -9,7 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use super::{EXIT_DIVERGED, Failure};
 use crate::Simulation;
 use crate::io::frames::write_frame;
-use crate::io::report::{ProbeTable, Summary, write_summary};
+use crate::io::report::{ProbeTable, Summary, write_json};
 use crate::scene::load_scene;
 
 /// Runs the scene at `path`, writing frames, the summary and the probe table.
@@ -80,7 +80,7 @@ pub(super) fn run(path: &Path, out: Option<PathBuf>, frames: Option<u32>, quiet:
         probes: simulation.probes().values.iter().map(|(k, v)| ((*k).to_owned(), *v)).collect(),
     };
     let summary_path = dir.join("summary.json");
-    write_summary(&summary_path, &summary)
+    write_json(&summary_path, &summary)
         .map_err(|e| Failure::io(format!("cannot write {}", summary_path.display()), e))?;
     let probes_path = dir.join("probes.csv");
     table.write_csv(&probes_path).map_err(|e| Failure::io(format!("cannot write {}", probes_path.display()), e))?;

@@ -47,10 +47,11 @@ pub struct Summary {
     pub probes: std::collections::BTreeMap<String, f64>,
 }
 
-/// Writes `summary` as pretty JSON to `path`.
-pub fn write_summary(path: &Path, summary: &Summary) -> std::io::Result<()> {
+/// Writes `value` (a [`Summary`], a bench report) as pretty JSON to `path`, whole or not
+/// at all.
+pub fn write_json(path: &Path, value: &impl Serialize) -> std::io::Result<()> {
     write_atomically(path, |out| {
-        serde_json::to_writer_pretty(&mut *out, summary).map_err(std::io::Error::other)?;
+        serde_json::to_writer_pretty(&mut *out, value).map_err(std::io::Error::other)?;
         writeln!(out)
     })
 }
