@@ -44,9 +44,11 @@ pub fn collide_with_bodies(
     total.resize(colliders.iter().len(), BodyLoad::default());
     inertia.clear();
     inertia.resize(total.len(), ApparentInertia::default());
-    // The free bodies' centres of mass, about which their apparent inertia is taken.
-    let centres: Vec<Option<Vec3>> =
-        colliders.iter().map(|(_, prop)| Some(rigid.as_ref()?.0.bodies[prop?.body].center_of_mass())).collect();
+    // With props, the free bodies' centres of mass, about which their apparent inertia is
+    // taken.
+    let centres: Option<Vec<Option<Vec3>>> = rigid.as_ref().map(|rigid| {
+        colliders.iter().map(|(_, prop)| prop.map(|prop| rigid.0.bodies[prop.body].center_of_mass())).collect()
+    });
     for (cloth, material, mut particles, topology, workspace, mut stats, mut touching) in &mut cloths {
         let bodies: Vec<ContactBody<'_>> = colliders
             .iter()
@@ -78,10 +80,12 @@ pub fn collide_with_bodies(
         for (sum, load) in total.iter_mut().zip(cloth_loads.iter()) {
             sum.add(load);
         }
-        let matrix = workspace.integrator.implicit.system();
-        let system = (solver.integrator.is_implicit() && matrix.blocks.len() == topology.pattern.columns.len())
-            .then_some(StepSystem { pattern: &topology.pattern, matrix });
-        add_apparent_inertia(&touching.0, system, inv_mass, position, &centres, inertia);
+        if let Some(centres) = &centres {
+            let matrix = workspace.integrator.implicit.system();
+            let system = (solver.integrator.is_implicit() && matrix.blocks.len() == topology.pattern.columns.len())
+                .then_some(StepSystem { pattern: &topology.pattern, matrix });
+            add_apparent_inertia(&touching.0, system, inv_mass, position, centres, inertia);
+        }
     }
     let Some(mut rigid) = rigid else {
         return;

@@ -5,6 +5,7 @@
 //! cloth's apparent inertia (see [`crate::collision::coupling`]).
 
 use bevy_ecs::prelude::*;
+use glam::Vec3;
 
 use crate::collision::collider::{ColliderMotion, ColliderState};
 use crate::components::{Collider, Prop, RigidStandIn};
@@ -21,6 +22,7 @@ pub fn step_props(
     rigid: Option<ResMut<PropWorld>>,
     stand_ins: Query<(&Collider, &RigidStandIn), Without<Prop>>,
     mut props: Query<(&mut Collider, &mut Prop)>,
+    mut before: Local<Vec<(Vec3, Vec3)>>,
 ) {
     let Some(mut rigid) = rigid else {
         return;
@@ -32,18 +34,15 @@ pub fn step_props(
             rigid.bodies[stand_in.body].set_next_kinematic_position(collider.motion.state_at(t).pose);
         }
     }
-    for (_, mut prop) in &mut props {
-        let body = &rigid.bodies[prop.body];
-        prop.coupling.rigid_change = (body.linvel(), body.angvel());
-    }
+    before.clear();
+    before.extend(props.iter().map(|(_, prop)| (rigid.bodies[prop.body].linvel(), rigid.bodies[prop.body].angvel())));
     rigid.gravity = gravity.0;
     rigid.integration_parameters.dt = settings.dt;
     rigid.step();
-    for (mut collider, mut prop) in &mut props {
+    for ((mut collider, mut prop), (linear, angular)) in props.iter_mut().zip(before.iter()) {
         let body = &rigid.bodies[prop.body];
         collider.motion = ColliderMotion::Driven(ColliderState::of_body(body));
-        let (linear, angular) = prop.coupling.rigid_change;
-        prop.coupling.rigid_change = (body.linvel() - linear, body.angvel() - angular);
+        prop.coupling.rigid_change = (body.linvel() - *linear, body.angvel() - *angular);
     }
 }
 

@@ -30,6 +30,7 @@ use glam::{Mat3, Vec3};
 
 use super::body_contact::Touch;
 use crate::solver::elements::block::{BlockMatrix, BlockPattern};
+use crate::solver::elements::spring::outer;
 
 /// A body's 6 × 6 apparent inertia, about the point it was taken about, in 3 × 3 blocks:
 /// the impulse and moment `(J, L)` that the velocity change `(δv, δω)` costs is
@@ -57,13 +58,6 @@ impl ApparentInertia {
         self.translation += block;
         self.coupling -= block * skew_j;
         self.rotation -= skew_i * block * skew_j;
-    }
-
-    /// Adds `other`'s inertia to this one's (taken about the same point).
-    pub fn add(&mut self, other: &ApparentInertia) {
-        self.translation += other.translation;
-        self.coupling += other.coupling;
-        self.rotation += other.rotation;
     }
 }
 
@@ -123,10 +117,6 @@ pub fn add_apparent_inertia(
             }
         }
     }
-}
-
-fn outer(a: Vec3, b: Vec3) -> Mat3 {
-    Mat3::from_cols(a * b.x, a * b.y, a * b.z)
 }
 
 /// What a free body's coupling carries from step to step.

@@ -31,6 +31,7 @@ use super::bvh::{Aabb, Bvh};
 use super::primitives::{Sweep, closest_between_segments, closest_on_triangle};
 use super::untangle::Untangler;
 use crate::solver::PARALLEL_MIN_LEN;
+use crate::solver::elements::spring::outer;
 
 /// The cloths that collide with one another, as one mesh with global vertex numbers.
 #[derive(Debug, Clone, Default)]
@@ -393,10 +394,6 @@ impl SelfContactSolver {
 /// The box around `vertices` at `x0` and at `x1`.
 fn swept_box(vertices: &[u32], x0: &[Vec3], x1: &[Vec3]) -> Aabb {
     Aabb::around(vertices.iter().flat_map(|&k| [x0[k as usize], x1[k as usize]]))
-}
-
-fn outer(a: Vec3, b: Vec3) -> glam::Mat3 {
-    glam::Mat3::from_cols(a * b.x, a * b.y, a * b.z)
 }
 
 fn find(parent: &mut [u32], mut k: u32) -> u32 {
