@@ -62,7 +62,11 @@ impl Simulation {
     /// Computes one frame. On divergence the world keeps the bad state for inspection
     /// and the render meshes keep the last good frame.
     pub fn step_frame(&mut self) -> Result<(), Divergence> {
-        self.world.run_schedule(FrameSchedule);
+        // The frame runs on a worker of rayon's pool: a parallel loop started from any
+        // other thread has to wake a worker and sleep until it is done, which cost more
+        // than the loops themselves (block descent starts a few hundred per step).
+        let world = &mut self.world;
+        rayon::scope(|_| world.run_schedule(FrameSchedule));
         if let Some(problem) = self.world.resource::<HealthReport>().problem.clone() {
             let clock = self.clock();
             return Err(Divergence {

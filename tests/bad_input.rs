@@ -149,3 +149,11 @@ fn a_prop_that_is_a_plane_or_has_no_mass_is_refused() {
     let message = error("    ],\n)", &prop("shape: Sphere(radius: -0.1), mass: 1.0"));
     assert_mentions(&message, &["props[0].shape.radius"]);
 }
+
+#[test]
+fn block_descent_needs_sweeps_and_a_chebyshev_radius_below_one() {
+    let message = error("substeps: 10)", "substeps: 10, descent: (sweeps: 0))");
+    assert_mentions(&message, &["scenes/broken.ron", "solver.descent.sweeps", "at least 1"]);
+    let message = error("substeps: 10)", "substeps: 10, descent: (spectral_radius: 1.2))");
+    assert_mentions(&message, &["solver.descent.spectral_radius", "outside [0, 1)", "scenes/broken.ron:3:"]);
+}

@@ -4,6 +4,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 
 use super::{BendingHinges, MembraneTriangles, Springs, Triangles};
+use crate::solver::descent::Colouring;
 use crate::solver::elements::BlockPattern;
 use crate::solver::forces::ForceScratch;
 use crate::solver::integrate::IntegratorWorkspace;
@@ -84,6 +85,8 @@ pub struct ClothTopology {
     pub face_slots: Vec<[[u32; 6]; 6]>,
     /// Where each membrane triangle's local blocks go.
     pub membrane_slots: Vec<[[u32; 3]; 3]>,
+    /// The particles in groups that share no element, for block descent's parallel sweeps.
+    pub colouring: Colouring,
     /// Inverse mass with pinned particles at zero [1/kg]: what the integrators accelerate.
     pub free_inv_mass: Vec<f32>,
     /// How many times this cache was built; lets tests see it is not rebuilt every step.
@@ -128,6 +131,7 @@ impl ClothTopology {
             hinge_slots: hinges.vertices.iter().map(|&h| pattern.stencil_slots(h)).collect(),
             face_slots: hinges.faces.iter().map(|f| pattern.stencil_slots(f.vertices)).collect(),
             membrane_slots: membranes.indices.iter().map(|&t| pattern.stencil_slots(t)).collect(),
+            colouring: Colouring::greedy(&pattern),
             pattern,
             free_inv_mass,
             builds,

@@ -26,8 +26,9 @@ use crate::resources::{
     AirSettings, ClothContacts, DivergenceLimit, EditAction, Gravity, HealthReport, IntegratorStats, ProbeRequests,
     Probes, PropWorld, ScheduledEdit, ScheduledEdits, SimClock, SolverSettings, StepSettings,
 };
+use crate::solver::descent::DescentSettings;
 use crate::solver::forces::{Air, Gust};
-use crate::solver::implicit::{ImplicitSettings, Rayleigh};
+use crate::solver::implicit::{ImplicitSettings, LinearSolver, Rayleigh};
 use crate::solver::integrate::MethodSettings;
 
 /// What a scene builds.
@@ -308,6 +309,11 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
                 cg_tolerance: scene.solver.cg_tolerance,
                 cg_max_iterations: scene.solver.cg_max_iterations,
                 newton_iterations: scene.solver.newton_iterations,
+                linear_solver: LinearSolver::ConjugateGradient,
+            },
+            descent: DescentSettings {
+                sweeps: scene.solver.descent.sweeps,
+                spectral_radius: scene.solver.descent.spectral_radius,
             },
         },
     });

@@ -9,6 +9,7 @@ use crate::builders::pins::{GridEdge, PinSelection};
 use crate::collision::collider::{ColliderShape, ContactResponse, Pose};
 use crate::components::ClothMaterial;
 use crate::fabrics::FabricDesc;
+use crate::solver::descent::DescentSettings;
 use crate::solver::integrate::Integrator;
 use crate::solver::probes::ClothProbe;
 
@@ -110,6 +111,8 @@ pub struct SolverDesc {
     pub cg_max_iterations: u32,
     /// Newton iterations per implicit step (1: linearly implicit).
     pub newton_iterations: u32,
+    /// How `BlockDescent` solves each step.
+    pub descent: DescentDesc,
     /// Courant number α of Zheng's adaptive step for explicit methods (Z4): each step is
     /// split so that no sub-step exceeds `α Δx √(ρ/E)`, Δx the shortest current edge.
     pub cfl: Option<f32>,
@@ -127,8 +130,26 @@ impl Default for SolverDesc {
             cg_tolerance: 1e-4,
             cg_max_iterations: 500,
             newton_iterations: 1,
+            descent: DescentDesc::default(),
             cfl: None,
         }
+    }
+}
+
+/// Block descent's effort per step.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DescentDesc {
+    /// Coloured Gauss–Seidel sweeps per Newton iteration (≥ 1): the cost of a step.
+    pub sweeps: u32,
+    /// Chebyshev's estimate of a sweep's spectral radius, in [0, 1) (0: no acceleration).
+    pub spectral_radius: f32,
+}
+
+impl Default for DescentDesc {
+    fn default() -> Self {
+        let settings = DescentSettings::default();
+        Self { sweeps: settings.sweeps, spectral_radius: settings.spectral_radius }
     }
 }
 

@@ -122,6 +122,17 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
     if cg >= 1.0 || scene.solver.cg_max_iterations == 0 {
         return Err(SceneError::invalid("solver.cg_tolerance", "needs a tolerance below 1 and at least one iteration"));
     }
+    let descent = &scene.solver.descent;
+    if descent.sweeps == 0 {
+        return Err(SceneError::invalid("solver.descent.sweeps", "must be at least 1"));
+    }
+    let radius = finite("solver.descent.spectral_radius", descent.spectral_radius)?;
+    if !(0.0..1.0).contains(&radius) {
+        return Err(SceneError::invalid(
+            "solver.descent.spectral_radius",
+            format!("{radius} is outside [0, 1); the default is 0.98, 0 turns Chebyshev off"),
+        ));
+    }
     if let Some(alpha) = scene.solver.cfl
         && positive("solver.cfl", alpha)? > 1.0
     {

@@ -5,6 +5,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::PARALLEL_MIN_LEN;
+use super::descent::Colouring;
 use super::elements::hinge::hinge_angle;
 use super::elements::{BlockMatrix, BlockPattern, SpringElement};
 use super::implicit::LinearDynamics;
@@ -299,6 +300,10 @@ impl LinearDynamics for ClothDynamics<'_> {
 
     fn is_free(&self, i: usize) -> bool {
         self.free_inv_mass[i] > 0.0
+    }
+
+    fn colouring(&self) -> &Colouring {
+        &self.model.topology.colouring
     }
 
     fn linearize(

@@ -22,6 +22,7 @@ use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
 use super::PARALLEL_MIN_LEN;
+use super::descent::{Colouring, DescentSettings, DescentWorkspace, descend};
 use super::elements::spring::outer;
 use super::elements::{BlockMatrix, BlockPattern};
 use super::integrate::{Dynamics, StepReport};
@@ -59,6 +60,19 @@ pub struct ImplicitSettings {
     /// more solve the nonlinear θ-step, which the trapezoidal rule needs to keep its
     /// stability when the forces are far from linear over a step.
     pub newton_iterations: u32,
+    /// How each Newton system is solved.
+    pub linear_solver: LinearSolver,
+}
+
+/// The solver of the linear system of each Newton iteration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LinearSolver {
+    /// Block-Jacobi preconditioned conjugate gradients to `cg_tolerance`: accurate, but
+    /// on stiff cloth at frame-sized steps it takes hundreds of iterations.
+    ConjugateGradient,
+    /// Coloured block Gauss–Seidel with Chebyshev acceleration ([`super::descent`]): a
+    /// fixed number of parallel sweeps, stopping early at `cg_tolerance`.
+    BlockDescent(DescentSettings),
 }
 
 /// A system whose forces can be linearised: what an implicit solver needs beyond
@@ -70,6 +84,8 @@ pub trait LinearDynamics: Dynamics {
     fn mass(&self, i: usize) -> f32;
     /// Whether particle `i` is free to move (not pinned).
     fn is_free(&self, i: usize) -> bool;
+    /// The particles grouped so that no two of a group share a block of the pattern.
+    fn colouring(&self) -> &Colouring;
     /// Forces [N] and their semi-definite derivatives at `(x, v, t)`.
     fn linearize(
         &mut self,
@@ -105,6 +121,8 @@ pub struct ImplicitWorkspace {
     filter: Vec<Mat3>,
     /// Per particle, the part of Δv the constraints prescribe.
     prescribed: Vec<Vec3>,
+    /// Block descent's buffers.
+    descent: DescentWorkspace,
     /// Impulse each contact constraint applied in the last step [N·s], parallel to the
     /// constraints passed to [`implicit_step`].
     pub constraint_impulses: Vec<Vec3>,
@@ -187,7 +205,7 @@ pub fn implicit_step(
         ws.rhs[i] = h * ws.start_force[i] + h * h * theta * ws.product[i];
     }
     build_system(settings, h, dynamics, ws);
-    report.iterations += conjugate_gradient(dynamics.pattern(), settings, true, ws);
+    report.iterations += solve(dynamics, settings, true, ws);
     ws.dv.copy_from_slice(&ws.delta);
     ws.constraint_impulses.clear();
     ws.constraint_impulses.resize(constraints.len(), Vec3::ZERO);
@@ -214,7 +232,7 @@ pub fn implicit_step(
                 h * ((1.0 - theta) * (ws.start_force[i] + damping_change) + theta * end_force) - mass * ws.dv[i];
         }
         build_system(settings, h, dynamics, ws);
-        report.iterations += conjugate_gradient(dynamics.pattern(), settings, false, ws);
+        report.iterations += solve(dynamics, settings, false, ws);
         add_constraint_impulses(dynamics.pattern(), constraints, ws);
         for i in 0..n {
             ws.dv[i] += ws.delta[i];
@@ -265,6 +283,42 @@ fn add_constraint_impulses(pattern: &BlockPattern, constraints: &[VelocityConstr
     for (impulse, c) in ws.constraint_impulses.iter_mut().zip(constraints) {
         let i = c.particle as usize;
         *impulse += ws.product[i] - ws.rhs[i];
+    }
+}
+
+/// Solves `system · delta = rhs` within the filters with the settings' linear solver:
+/// from the prescribed part when `prescribe` (the first Newton iteration), else from
+/// zero. Returns the iterations (or sweeps) taken.
+fn solve(
+    dynamics: &impl LinearDynamics,
+    settings: &ImplicitSettings,
+    prescribe: bool,
+    ws: &mut ImplicitWorkspace,
+) -> u32 {
+    let pattern = dynamics.pattern();
+    match settings.linear_solver {
+        LinearSolver::ConjugateGradient => conjugate_gradient(pattern, settings, prescribe, ws),
+        LinearSolver::BlockDescent(descent) => {
+            // From rest (Δv = 0: the inertial step), never from the last step's Δv:
+            // what a few sweeps leave of that guess in the stiff modes is an explicit
+            // step, and a hanging sheet diverged within ten frames.
+            if prescribe {
+                ws.delta.copy_from_slice(&ws.prescribed);
+            } else {
+                ws.delta.fill(Vec3::ZERO);
+            }
+            descend(
+                pattern,
+                dynamics.colouring(),
+                &ws.system,
+                &ws.rhs,
+                &ws.filter,
+                &descent,
+                settings.cg_tolerance,
+                &mut ws.delta,
+                &mut ws.descent,
+            )
+        }
     }
 }
 

@@ -12,8 +12,9 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::PARALLEL_MIN_LEN;
+use super::descent::DescentSettings;
 use super::implicit::{
-    ImplicitSettings, ImplicitWorkspace, LinearDynamics, Rayleigh, VelocityConstraint, implicit_step,
+    ImplicitSettings, ImplicitWorkspace, LinearDynamics, LinearSolver, Rayleigh, VelocityConstraint, implicit_step,
 };
 
 /// The integration method of a scene (Durupınar D10, Zheng Z4).
@@ -39,16 +40,20 @@ pub enum Integrator {
     /// Bricis's Newmark θ-method (θ = ½ by default) with Rayleigh damping: stable at large
     /// steps without numerical damping of its own.
     Newmark,
+    /// Implicit Euler solved by block descent ([`super::descent`]): a fixed number of
+    /// coloured, parallel per-particle Newton sweeps per step, so a step costs the same
+    /// whatever the stiffness; stable at frame-sized steps.
+    BlockDescent,
 }
 
 impl Integrator {
     /// Whether the method solves a linear system each step.
     pub fn is_implicit(self) -> bool {
-        matches!(self, Integrator::ImplicitEuler | Integrator::Newmark)
+        matches!(self, Integrator::ImplicitEuler | Integrator::Newmark | Integrator::BlockDescent)
     }
 
     /// Every integrator, for listings and tests.
-    pub const ALL: [Integrator; 9] = [
+    pub const ALL: [Integrator; 10] = [
         Integrator::ExplicitEuler,
         Integrator::SymplecticEuler,
         Integrator::Midpoint,
@@ -58,6 +63,7 @@ impl Integrator {
         Integrator::VelocityVerlet,
         Integrator::ImplicitEuler,
         Integrator::Newmark,
+        Integrator::BlockDescent,
     ];
 
     /// The name used in scene files and reports.
@@ -72,6 +78,7 @@ impl Integrator {
             Integrator::VelocityVerlet => "VelocityVerlet",
             Integrator::ImplicitEuler => "ImplicitEuler",
             Integrator::Newmark => "Newmark",
+            Integrator::BlockDescent => "BlockDescent",
         }
     }
 }
@@ -119,6 +126,8 @@ pub struct MethodSettings {
     /// θ, Rayleigh damping and solver settings of the implicit methods. For
     /// [`Integrator::ImplicitEuler`] θ is 1 whatever is given here.
     pub implicit: ImplicitSettings,
+    /// Sweeps and acceleration of [`Integrator::BlockDescent`].
+    pub descent: DescentSettings,
     /// Courant number α of Zheng's adaptive step for the explicit methods: each step is
     /// split into sub-steps of at most `α Δx √(ρ/E)` ([`super::cfl`]). `None`: no split.
     pub cfl: Option<f32>,
@@ -135,7 +144,9 @@ impl Default for MethodSettings {
                 cg_tolerance: 1e-4,
                 cg_max_iterations: 500,
                 newton_iterations: 1,
+                linear_solver: LinearSolver::ConjugateGradient,
             },
+            descent: DescentSettings::default(),
         }
     }
 }
@@ -248,6 +259,14 @@ pub fn step(
         Integrator::ImplicitEuler => {
             let euler = ImplicitSettings { theta: 1.0, ..settings.implicit };
             Ok(implicit_step(&euler, dynamics, constraints, x, v, t, h, &mut ws.implicit))
+        }
+        Integrator::BlockDescent => {
+            let descent = ImplicitSettings {
+                theta: 1.0,
+                linear_solver: LinearSolver::BlockDescent(settings.descent),
+                ..settings.implicit
+            };
+            Ok(implicit_step(&descent, dynamics, constraints, x, v, t, h, &mut ws.implicit))
         }
         Integrator::Newmark => {
             Ok(implicit_step(&settings.implicit, dynamics, constraints, x, v, t, h, &mut ws.implicit))
