@@ -2,7 +2,8 @@
 //! triangle–triangle count `self_intersections`, computed independently of the contact
 //! code, stays 0 at every frame, while the same scenes without self-collision pass
 //! through themselves (hundreds of pairs; see each scene's comment). Each test also
-//! checks that contact really happened, so it cannot pass on a cloth that never folds.
+//! checks that contact really happened, so it cannot pass on a cloth that never folds. A
+//! heap in contact gives the same bits on one thread and two.
 
 mod common;
 
@@ -52,4 +53,24 @@ fn a_strip_falling_in_folds_heaps_up_untangled() {
 fn a_twisted_strip_coils_untangled() {
     let (impacts, pairs) = run_untangled("twist.ron", None);
     assert!(impacts > 100.0 && pairs > 100.0, "the strip wrung onto itself: {impacts} impacts, {pairs} pairs");
+}
+
+#[test]
+fn a_heap_in_contact_gives_the_same_bits_on_one_thread_and_two() {
+    // The strip lands at about frame 20 and heaps up from there: ground contact, self
+    // proximity, continuous impacts and impact zones all run in these frames.
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("a thread pool");
+        pool.install(|| {
+            let mut sim = common::bundled("fold_heap.ron");
+            common::run_frames(&mut sim, 40);
+            let pairs = sim.probes().get("self_contact_pairs").expect("self-contact probes");
+            let world = sim.world_mut();
+            let positions = world.query::<&Particles>().single(world).expect("one cloth").position.clone();
+            (positions, pairs)
+        })
+    };
+    let (one, pairs) = run(1);
+    assert!(pairs > 0.0, "no self-contact by frame 40");
+    assert_eq!(one, run(2).0, "two threads changed the result");
 }
