@@ -1,15 +1,17 @@
-//! Criterion benchmarks: one whole step of a hanging grid cloth through the engine, and
-//! the force and integration kernels alone, at 64×64 and 256×256 particles.
+//! Criterion benchmarks: one whole step of a hanging grid cloth through the engine (64×64
+//! and 256×256 particles), and the kernels alone at 1 k, 16 k and 65 k particles.
 
 use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use glam::{Affine3A, Vec3};
+use glam::{Affine3A, Mat3, Vec3};
 use selvedge::Simulation;
 use selvedge::builders::grid::build_grid;
-use selvedge::components::{ClothMaterial, ClothTopology, SpringCoefficients};
+use selvedge::components::{BendingDesc, BendingLawDesc, ClothMaterial, ClothTopology, MembraneDesc};
 use selvedge::scene::parse_scene;
+use selvedge::solver::descent::{DescentSettings, DescentWorkspace, descend};
+use selvedge::solver::elements::BlockMatrix;
 use selvedge::solver::forces::{Air, ClothDynamics, ForceModel, ForceScratch};
 use selvedge::solver::integrate::{Integrator, IntegratorWorkspace, MethodSettings, step};
 
@@ -43,15 +45,27 @@ fn whole_step(c: &mut Criterion) {
     group.finish();
 }
 
+/// Particles per side of the kernel benches: about 1 k, 16 k and 65 k particles.
+const KERNEL_SIZES: [u32; 3] = [32, 128, 256];
+
+/// The kernels alone on the material of the `selvedge bench` scenes (membrane μ = λ =
+/// 1000 N/m, bending 1e-5 N·m, 0.2 kg/m²): force evaluation, derivative assembly, one
+/// symmetric block-descent sweep over the implicit-Euler system at 1/60 s, and whole
+/// steps of three integrators.
 fn kernels(c: &mut Criterion) {
-    let coefficients = SpringCoefficients { stiffness: 100.0, damping: 0.01 };
-    let springs = Some(coefficients);
-    let material =
-        ClothMaterial { density: 0.2, stretch: springs, shear: springs, bend: springs, membrane: None, bending: None };
+    let material = ClothMaterial {
+        density: 0.2,
+        stretch: None,
+        shear: None,
+        bend: None,
+        membrane: Some(MembraneDesc::Isotropic { young: 2666.667, poisson: 1.0 / 3.0 }),
+        bending: Some(BendingDesc { warp: 1e-5, weft: 1e-5, twist: None, law: BendingLawDesc::Linear }),
+    };
     let mut group = c.benchmark_group("kernels");
     group.sample_size(20);
-    for n in SIZES {
-        let cloth = build_grid((1.0, 1.0), (n, n), Affine3A::IDENTITY, &material);
+    for n in KERNEL_SIZES {
+        let mut cloth = build_grid((1.0, 1.0), (n, n), Affine3A::IDENTITY, &material);
+        cloth.add_surface_elements(&material, Vec3::X);
         let count = cloth.particles.len();
         let topology = ClothTopology::build(
             &cloth.particles.inv_mass,
@@ -71,22 +85,43 @@ fn kernels(c: &mut Criterion) {
             membranes: &cloth.membranes,
             topology: &topology,
             gravity: Vec3::new(0.0, -9.81, 0.0),
-            air: Air { drag: 1.0, wind: Vec3::X, wind_drag: 0.6, gust: None, area_damping: 0.0 },
+            air: Air::default(),
             user_forces: &[],
         };
+        let size = format!("{count}");
         let mut scratch = ForceScratch::default();
         let mut force = vec![Vec3::ZERO; count];
-        let (x, v) = (cloth.particles.position.clone(), vec![Vec3::ZERO; count]);
-        group.bench_function(BenchmarkId::new("forces", format!("{n}x{n}")), |b| {
+        // A sagging, slightly stretched state, so that every element is loaded.
+        let x: Vec<Vec3> = cloth.particles.position.iter().map(|p| *p * 1.01 + Vec3::Z * 0.1 * p.x * p.x).collect();
+        let v = vec![Vec3::ZERO; count];
+        group.bench_function(BenchmarkId::new("forces", &size), |b| {
             b.iter(|| model.eval(black_box(&x), &v, 0.0, &mut scratch, &mut force));
         });
+        let (mut dfdx, mut dfdv) = (BlockMatrix::default(), BlockMatrix::default());
+        group.bench_function(BenchmarkId::new("derivatives", &size), |b| {
+            b.iter(|| model.assemble(black_box(&x), &v, 0.0, true, &mut scratch, &mut force, &mut dfdx, &mut dfdv));
+        });
+        let h = 1.0 / 60.0f32;
+        let pattern = &topology.pattern;
+        let mut system = BlockMatrix { blocks: dfdx.blocks.iter().map(|k| -h * h * *k).collect() };
+        system.add_diagonal(pattern, |i| 1.0 / cloth.particles.inv_mass[i]);
+        let rhs: Vec<Vec3> = force.iter().map(|f| h * *f).collect();
+        let filter = vec![Mat3::IDENTITY; count];
+        let one_sweep = DescentSettings { sweeps: 1, spectral_radius: 0.0 };
+        let mut descent = DescentWorkspace::default();
+        let mut delta = vec![Vec3::ZERO; count];
+        group.bench_function(BenchmarkId::new("descent_sweep", &size), |b| {
+            b.iter(|| {
+                descend(pattern, &topology.colouring, &system, &rhs, &filter, &one_sweep, 0.0, &mut delta, &mut descent)
+            });
+        });
         let settings = MethodSettings::default();
-        for method in [Integrator::SymplecticEuler, Integrator::Rk4, Integrator::ImplicitEuler] {
+        for method in [Integrator::SymplecticEuler, Integrator::ImplicitEuler, Integrator::BlockDescent] {
             let mut dynamics = ClothDynamics { model, free_inv_mass: &topology.free_inv_mass, scratch: &mut scratch };
             let mut ws = IntegratorWorkspace::default();
             ws.resize(count);
             let (mut x, mut v) = (x.clone(), v.clone());
-            group.bench_function(BenchmarkId::new(format!("integrate/{}", method.name()), format!("{n}x{n}")), |b| {
+            group.bench_function(BenchmarkId::new(format!("integrate/{}", method.name()), &size), |b| {
                 b.iter(|| {
                     step(method, &mut dynamics, &[], &mut x, &mut v, 0.0, 1e-5, &settings, &mut ws).expect("fixed step")
                 });
