@@ -153,8 +153,7 @@ pub fn descend(
         let mut residual = 0.0f64;
         // Forward then backward over the colours: a symmetric sweep, whose iteration
         // matrix has real eigenvalues in [0, 1) for a positive definite system, which is
-        // what the Chebyshev weights assume (a one-way sweep's complex ones made ρ = 0.99
-        // diverge on a hanging sheet).
+        // what the Chebyshev weights assume (a one-way sweep's may be complex).
         let colours = colouring.colours();
         for (visit, c) in (0..colours).chain((0..colours).rev()).enumerate() {
             let rows = colouring.colour(c);
