@@ -59,9 +59,8 @@ fn a_twisted_strip_coils_untangled() {
 fn a_heap_in_contact_gives_the_same_bits_on_one_thread_and_two() {
     // The strip lands at about frame 20 and heaps up from there: ground contact, self
     // proximity, continuous impacts and impact zones all run in these frames.
-    let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("a thread pool");
-        pool.install(|| {
+    let run = |threads| {
+        common::on_threads(threads, || {
             let mut sim = common::bundled("fold_heap.ron");
             common::run_frames(&mut sim, 40);
             let pairs = sim.probes().get("self_contact_pairs").expect("self-contact probes");

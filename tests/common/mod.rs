@@ -23,6 +23,12 @@ pub fn run_frames(simulation: &mut Simulation, frames: u32) {
     }
 }
 
+/// Runs `work` on a thread pool of its own with `threads` threads, so that everything it
+/// steps runs on that many.
+pub fn on_threads<T: Send>(threads: usize, work: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("a thread pool").install(work)
+}
+
 /// The value of a probe after the last frame.
 pub fn probe(simulation: &Simulation, name: &str) -> f64 {
     simulation.probes().get(name).unwrap_or_else(|| panic!("no probe {name}"))
