@@ -253,8 +253,7 @@ pub fn implicit_step(
     report
 }
 
-/// `A = (1 + hα) M − h D − (hβ + h²θ²) K` from the derivatives in `ws`, with its
-/// block-Jacobi preconditioner; zeroes the right-hand side on pinned particles.
+/// `A = (1 + hα) M − h D − (hβ + h²θ²) K` from the derivatives in `ws`.
 fn build_system(settings: &ImplicitSettings, h: f32, dynamics: &impl LinearDynamics, ws: &mut ImplicitWorkspace) {
     let (theta, Rayleigh { alpha, beta }) = (settings.theta, settings.rayleigh);
     let pattern = dynamics.pattern();
@@ -262,11 +261,6 @@ fn build_system(settings: &ImplicitSettings, h: f32, dynamics: &impl LinearDynam
     ws.system.blocks.clear();
     ws.system.blocks.extend(ws.dfdv.blocks.iter().zip(&ws.dfdx.blocks).map(|(d, k)| -h * *d - k_weight * *k));
     ws.system.add_diagonal(pattern, |i| (1.0 + h * alpha) * dynamics.mass(i));
-    ws.preconditioner.clear();
-    ws.preconditioner.extend((0..ws.filter.len()).map(|i| {
-        let block = ws.system.block(pattern, i as u32, i as u32);
-        if block.determinant().abs() > 0.0 { block.inverse() } else { Mat3::IDENTITY }
-    }));
 }
 
 fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
@@ -295,30 +289,28 @@ fn solve(
     prescribe: bool,
     ws: &mut ImplicitWorkspace,
 ) -> u32 {
+    // Both solvers start from rest (Δv = 0: the inertial step), never from the last step's
+    // Δv: what a few descent sweeps leave of that guess in the stiff modes is an explicit
+    // step, and a hanging sheet diverged within ten frames.
+    if prescribe {
+        ws.delta.copy_from_slice(&ws.prescribed);
+    } else {
+        ws.delta.fill(Vec3::ZERO);
+    }
     let pattern = dynamics.pattern();
     match settings.linear_solver {
-        LinearSolver::ConjugateGradient => conjugate_gradient(pattern, settings, prescribe, ws),
-        LinearSolver::BlockDescent(descent) => {
-            // From rest (Δv = 0: the inertial step), never from the last step's Δv:
-            // what a few sweeps leave of that guess in the stiff modes is an explicit
-            // step, and a hanging sheet diverged within ten frames.
-            if prescribe {
-                ws.delta.copy_from_slice(&ws.prescribed);
-            } else {
-                ws.delta.fill(Vec3::ZERO);
-            }
-            descend(
-                pattern,
-                dynamics.colouring(),
-                &ws.system,
-                &ws.rhs,
-                &ws.filter,
-                &descent,
-                settings.cg_tolerance,
-                &mut ws.delta,
-                &mut ws.descent,
-            )
-        }
+        LinearSolver::ConjugateGradient => conjugate_gradient(pattern, settings, ws),
+        LinearSolver::BlockDescent(descent) => descend(
+            pattern,
+            dynamics.colouring(),
+            &ws.system,
+            &ws.rhs,
+            &ws.filter,
+            &descent,
+            settings.cg_tolerance,
+            &mut ws.delta,
+            &mut ws.descent,
+        ),
     }
 }
 
@@ -339,21 +331,15 @@ fn precondition(residual: &[Vec3], preconditioner: &[Mat3], out: &mut [Vec3]) {
 }
 
 /// Solves `system · delta = rhs` within the constraint filters, with block-Jacobi
-/// preconditioned conjugate gradients (Baraff & Witkin's modified PCG): `delta` starts at
-/// the prescribed part when `prescribe`, else at zero, and only moves within the filters.
-/// Returns the iterations taken. Stops early on a direction of non-positive curvature,
-/// which a semi-definite assembly should not give.
-fn conjugate_gradient(
-    pattern: &BlockPattern,
-    settings: &ImplicitSettings,
-    prescribe: bool,
-    ws: &mut ImplicitWorkspace,
-) -> u32 {
-    if prescribe {
-        ws.delta.copy_from_slice(&ws.prescribed);
-    } else {
-        ws.delta.fill(Vec3::ZERO);
-    }
+/// preconditioned conjugate gradients (Baraff & Witkin's modified PCG): `delta` starts as
+/// given and only moves within the filters. Returns the iterations taken. Stops early on
+/// a direction of non-positive curvature, which a semi-definite assembly should not give.
+fn conjugate_gradient(pattern: &BlockPattern, settings: &ImplicitSettings, ws: &mut ImplicitWorkspace) -> u32 {
+    ws.preconditioner.clear();
+    ws.preconditioner.extend((0..ws.filter.len()).map(|i| {
+        let block = ws.system.block(pattern, i as u32, i as u32);
+        if block.determinant().abs() > 0.0 { block.inverse() } else { Mat3::IDENTITY }
+    }));
     ws.system.multiply(pattern, &ws.delta, &mut ws.product);
     for i in 0..ws.residual.len() {
         ws.residual[i] = ws.rhs[i] - ws.product[i];
