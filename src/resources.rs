@@ -51,6 +51,14 @@ pub struct SimClock {
     pub frame: u64,
 }
 
+impl SimClock {
+    /// The time at the end of the step of length `dt` [s] now being taken: where moving
+    /// bodies and grips are when the step's contacts and constraints are resolved.
+    pub fn step_end(&self, dt: f32) -> f32 {
+        (self.time_s + f64::from(dt)) as f32
+    }
+}
+
 /// Limits past which a run is declared diverged.
 #[derive(Resource, Debug, Clone, Copy, PartialEq)]
 pub struct DivergenceLimit {

@@ -12,7 +12,7 @@ use crate::solver::strain_limit::{LimitedEdges, limit_strain};
 /// step. Only targets change, so the cloth's topology is not rebuilt. Runs in
 /// [`SubstepSystems::Constraints`], before the pins are held.
 pub fn move_grips(clock: Res<SimClock>, settings: Res<StepSettings>, mut cloths: Query<(&mut Pins, &Grips)>) {
-    let t = (clock.time_s + f64::from(settings.dt)) as f32;
+    let t = clock.step_end(settings.dt);
     for (mut pins, grips) in &mut cloths {
         let pins = pins.bypass_change_detection();
         for grip in &grips.0 {

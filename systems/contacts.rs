@@ -38,7 +38,7 @@ pub fn collide_with_bodies(
     if colliders.is_empty() {
         return;
     }
-    let t = (clock.time_s + f64::from(settings.dt)) as f32;
+    let t = clock.step_end(settings.dt);
     let (cloth_loads, total, inertia) = &mut *sums;
     total.clear();
     total.resize(colliders.iter().len(), BodyLoad::default());

@@ -28,7 +28,7 @@ pub fn step_props(
         return;
     };
     let rigid = &mut rigid.0;
-    let t = (clock.time_s + f64::from(settings.dt)) as f32;
+    let t = clock.step_end(settings.dt);
     for (collider, stand_in) in &stand_ins {
         if let ColliderMotion::Keyframes(_) = collider.motion {
             rigid.bodies[stand_in.body].set_next_kinematic_position(collider.motion.state_at(t).pose);
