@@ -3,7 +3,7 @@
 use bevy_ecs::prelude::*;
 use glam::{Mat3, Vec3};
 
-use crate::collision::body_contact::{BodyLoad, ContactBody, resolve_body_contacts};
+use crate::collision::body_contact::{BodyContactOutput, BodyLoad, ContactBody, resolve_body_contacts};
 use crate::collision::coupling::{ApparentInertia, StepSystem, add_apparent_inertia};
 use crate::collision::self_contact::{ContactMesh, SelfContactReport, SelfContactSolver};
 use crate::components::{
@@ -33,38 +33,35 @@ pub fn collide_with_bodies(
         &mut ContactStats,
         &mut Touching,
     )>,
-    mut sums: Local<(Vec<BodyLoad>, Vec<BodyLoad>, Vec<ApparentInertia>)>,
+    mut buffers: Local<BodyBuffers>,
 ) {
     if colliders.is_empty() {
         return;
     }
     let t = clock.step_end(settings.dt);
-    let (cloth_loads, total, inertia) = &mut *sums;
+    let BodyBuffers { bodies, centres, output, total, inertia } = &mut *buffers;
     total.clear();
     total.resize(colliders.iter().len(), BodyLoad::default());
     inertia.clear();
     inertia.resize(total.len(), ApparentInertia::default());
-    // With props, the free bodies' centres of mass, about which their apparent inertia is
-    // taken.
-    let centres: Option<Vec<Option<Vec3>>> = rigid.as_ref().map(|rigid| {
-        colliders.iter().map(|(_, prop)| prop.map(|prop| rigid.0.bodies[prop.body].center_of_mass())).collect()
-    });
+    centres.clear();
+    if let Some(rigid) = &rigid {
+        centres.extend(colliders.iter().map(|(_, prop)| prop.map(|prop| rigid.0.bodies[prop.body].center_of_mass())));
+    }
     for (cloth, material, mut particles, topology, workspace, mut stats, mut touching) in &mut cloths {
-        let bodies: Vec<ContactBody<'_>> = colliders
-            .iter()
-            .map(|(c, _)| ContactBody {
-                shape: c.shape.as_ref(),
-                state: c.motion.state_at(t),
-                friction: c.friction,
-                thickness: c.thickness + cloth.thickness,
-                response: c.response,
-            })
-            .collect();
+        bodies.clear();
+        bodies.extend(colliders.iter().map(|(c, _)| ContactBody {
+            shape: c.shape.clone(),
+            state: c.motion.state_at(t),
+            friction: c.friction,
+            thickness: c.thickness + cloth.thickness,
+            response: c.response,
+        }));
         let Particles { position, velocity, inv_mass, .. } = &mut *particles;
         let density = material.density;
         let area = |i: usize| 1.0 / (inv_mass[i] * density);
         let totals = resolve_body_contacts(
-            &bodies,
+            bodies,
             inv_mass,
             &topology.free_inv_mass,
             area,
@@ -74,13 +71,13 @@ pub fn collide_with_bodies(
             position,
             velocity,
             &mut touching.0,
-            cloth_loads,
+            output,
         );
         stats.0.add(&totals);
-        for (sum, load) in total.iter_mut().zip(cloth_loads.iter()) {
+        for (sum, load) in total.iter_mut().zip(output.loads.iter()) {
             sum.add(load);
         }
-        if let Some(centres) = &centres {
+        if rigid.is_some() {
             let matrix = workspace.integrator.implicit.system();
             let system = (solver.integrator.is_implicit() && matrix.blocks.len() == topology.pattern.columns.len())
                 .then_some(StepSystem { pattern: &topology.pattern, matrix });
@@ -111,6 +108,22 @@ pub fn collide_with_bodies(
     }
 }
 
+/// What [`collide_with_bodies`] keeps from step to step so that it does not allocate.
+#[derive(Default)]
+pub struct BodyBuffers {
+    /// The colliders as the contact kernel sees them.
+    bodies: Vec<ContactBody>,
+    /// With props, the free bodies' centres of mass, about which their apparent inertia
+    /// is taken.
+    centres: Vec<Option<Vec3>>,
+    /// One cloth's contact results.
+    output: BodyContactOutput,
+    /// Every cloth's push on each body.
+    total: Vec<BodyLoad>,
+    /// The cloths' apparent inertia on each body.
+    inertia: Vec<ApparentInertia>,
+}
+
 /// Resolves cloth–cloth contact of every self-colliding cloth, all together as one mesh
 /// so that layers meet one another: the step from where it started to where the
 /// integrator, the constraints and the bodies put it is made free of crossings. Runs in
@@ -129,12 +142,11 @@ pub fn collide_cloths(
     )>,
 ) {
     let contacts = &mut *contacts;
-    let members: Vec<(Entity, u32)> =
-        cloths.iter().map(|(entity, _, _, topology, ..)| (entity, topology.builds)).collect();
-    if members.is_empty() {
+    let members = || cloths.iter().map(|(entity, _, _, topology, ..)| (entity, topology.builds));
+    if cloths.is_empty() {
         return;
     }
-    if members != contacts.members {
+    if !members().eq(contacts.members.iter().copied()) {
         let mut mesh = ContactMesh::default();
         for (_, particles, triangles, _, _, _, collision) in &cloths {
             let offset = mesh.half_gap.len() as u32;
@@ -147,7 +159,7 @@ pub fn collide_cloths(
         contacts.mesh = mesh;
         // A new mesh may start tangled: the solver starts over, looking for crossings.
         contacts.solver = SelfContactSolver::default();
-        contacts.members = members;
+        contacts.members = members().collect();
     }
     let ClothContacts { mesh, solver, start, end, velocity, frame, .. } = contacts;
     start.clear();

@@ -5,7 +5,7 @@ use glam::Vec3;
 
 use super::forces::{ForceElements, ForceEnvironment};
 use crate::collision::body_contact::ContactTotals;
-use crate::collision::intersection::count_self_intersections;
+use crate::collision::intersection::IntersectionCounter;
 use crate::components::{
     Cloth, Collider, ContactStats, MembraneTriangles, Particles, Pins, SelfCollision, SolverWorkspace, Springs,
     Triangles,
@@ -54,17 +54,18 @@ pub fn measure_probes(
     environment: ForceEnvironment,
     mut probes: ResMut<Probes>,
     mut cloths: Query<(&Particles, ForceElements, &Pins, &mut SolverWorkspace)>,
+    mut counter: Local<IntersectionCounter>,
 ) {
     let (mut kinetic, mut potential, mut strain, mut pin_force) = (0.0, 0.0, f32::NEG_INFINITY, Vec3::ZERO);
     let mut intersections = 0;
     for (particles, elements, pins, mut workspace) in &mut cloths {
         let model = environment.model(&particles.inv_mass, elements);
-        intersections += count_self_intersections(&particles.position, model.triangles);
+        intersections += counter.count(&particles.position, model.triangles);
         kinetic += kinetic_energy(&particles.velocity, &particles.inv_mass);
-        potential += model.potential_energy(&particles.position);
+        let SolverWorkspace { forces, force, .. } = &mut *workspace;
+        potential += model.potential_energy(&particles.position, forces);
         strain = strain.max(max_strain(&particles.position, &particles.rest_position, model.springs, model.membranes));
         if !pins.is_empty() {
-            let SolverWorkspace { forces, force, .. } = &mut *workspace;
             force.resize(particles.len(), Vec3::ZERO);
             model.eval(&particles.position, &particles.velocity, environment.time(), forces, force);
             pin_force += pin_reaction(&pins.particles, force);

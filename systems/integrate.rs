@@ -25,19 +25,17 @@ pub fn integrate_cloths(
     mut cloths: Query<(&Cloth, &mut Particles, ForceElements, &Touching, &mut SolverWorkspace)>,
 ) {
     for (cloth, mut particles, elements, touching, mut workspace) in &mut cloths {
-        let SolverWorkspace { integrator, forces, support, .. } = &mut *workspace;
+        let SolverWorkspace { integrator, forces, support, constraints, .. } = &mut *workspace;
         // Particles the last step left on a body stay on it while the forces press them
         // into it; those pulled away are let go.
-        let constraints: Vec<VelocityConstraint> = touching
-            .0
-            .iter()
-            .filter(|t| particles.force[t.particle as usize].dot(t.normal) < 0.0)
-            .map(|t| VelocityConstraint {
+        constraints.clear();
+        constraints.extend(touching.0.iter().filter(|t| particles.force[t.particle as usize].dot(t.normal) < 0.0).map(
+            |t| VelocityConstraint {
                 particle: t.particle,
                 normal: t.normal,
                 normal_velocity: t.surface_velocity.dot(t.normal),
-            })
-            .collect();
+            },
+        ));
         integrator.resize(particles.len());
         for ((a, f), w) in integrator.start_acceleration.iter_mut().zip(&particles.force).zip(&elements.5.free_inv_mass)
         {
@@ -63,7 +61,7 @@ pub fn integrate_cloths(
                 dynamics.acceleration(&x, &v, t, &mut integrator.start_acceleration);
             }
             result =
-                step(solver.integrator, &mut dynamics, &constraints, &mut x, &mut v, t, h, &solver.method, integrator)
+                step(solver.integrator, &mut dynamics, constraints, &mut x, &mut v, t, h, &solver.method, integrator)
                     .map(|report| {
                         let total = result.unwrap_or_default();
                         StepReport {

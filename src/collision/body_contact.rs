@@ -10,17 +10,17 @@
 
 use glam::Vec3;
 use parry3d::query::Ray;
-use parry3d::shape::Shape;
+use parry3d::shape::SharedShape;
 use rayon::prelude::*;
 
 use super::collider::{ColliderState, ContactResponse, Regimes};
 use crate::solver::PARALLEL_MIN_LEN;
 
 /// A body as the contact kernel sees it at one instant.
-#[derive(Clone, Copy)]
-pub struct ContactBody<'a> {
-    /// Its shape.
-    pub shape: &'a dyn Shape,
+#[derive(Clone)]
+pub struct ContactBody {
+    /// Its shape (shared with its collider: cloning it counts a reference, no more).
+    pub shape: SharedShape,
     /// Pose and velocity.
     pub state: ColliderState,
     /// Coulomb friction coefficient [-].
@@ -90,6 +90,16 @@ impl BodyLoad {
 /// A body's share of one particle's contact: the body's index and the impulse it gave.
 type Push = Option<(u32, Vec3)>;
 
+/// What [`resolve_body_contacts`] leaves for the caller, in buffers kept from step to
+/// step.
+#[derive(Debug, Clone, Default)]
+pub struct BodyContactOutput {
+    /// Per body, what the cloth pushed it with.
+    pub loads: Vec<BodyLoad>,
+    /// Each particle's outcome, combined in particle order after the parallel pass.
+    outcomes: Vec<ParticleContact>,
+}
+
 /// One particle's contact outcome, combined in particle order.
 #[derive(Debug, Clone, Copy, Default)]
 struct ParticleContact {
@@ -139,14 +149,14 @@ struct Particle<'p> {
 /// next implicit step to keep them there; `support` is the impulse such a step's
 /// constraints gave each particle [N·s] (zero for explicit steps), which counts as contact
 /// force, given to the body the particle touched at the end of the last step (`touching`
-/// as it comes in). `loads` receives, per body, what the cloth pushed it with.
+/// as it comes in). `output.loads` receives, per body, what the cloth pushed it with.
 ///
 /// A particle that moved further than the contact thickness in the step is first traced
 /// along its path (a ray from `start`): if the path enters a body, the particle is put
 /// back where it entered, so fast cloth cannot tunnel through thin bodies. Pinned particles
 /// (`free_inv_mass` zero) are left alone.
 pub fn resolve_body_contacts(
-    bodies: &[ContactBody<'_>],
+    bodies: &[ContactBody],
     inv_mass: &[f32],
     free_inv_mass: &[f32],
     area: impl Fn(usize) -> f32 + Sync,
@@ -156,11 +166,11 @@ pub fn resolve_body_contacts(
     x: &mut [Vec3],
     v: &mut [Vec3],
     touching: &mut Vec<Touch>,
-    loads: &mut Vec<BodyLoad>,
+    output: &mut BodyContactOutput,
 ) -> ContactTotals {
+    let BodyContactOutput { loads, outcomes } = output;
     let previous: &[Touch] = touching;
-    let outcomes: Vec<ParticleContact> = x
-        .par_iter_mut()
+    x.par_iter_mut()
         .zip(v.par_iter_mut())
         .enumerate()
         .with_min_len(PARALLEL_MIN_LEN)
@@ -209,12 +219,12 @@ pub fn resolve_body_contacts(
             outcome.at = *particle.x;
             outcome
         })
-        .collect();
+        .collect_into_vec(outcomes);
     touching.clear();
     touching.extend(outcomes.iter().filter_map(|o| o.touch));
     loads.clear();
     loads.resize(bodies.len(), BodyLoad::default());
-    for outcome in &outcomes {
+    for outcome in outcomes.iter() {
         for &(body, impulse) in outcome.pushes.iter().flatten() {
             // A touch left by a body that is no longer listed has no one to push.
             if let Some(load) = loads.get_mut(body as usize) {
@@ -234,7 +244,7 @@ pub fn resolve_body_contacts(
 /// taken relative to the body (its start carried along by the body's motion over the
 /// step `h`), so a body moving onto resting cloth meets it with the face it moves with,
 /// not with whichever face the cloth ends nearest.
-fn locate(body: &ContactBody<'_>, h: f32, start: Vec3, x: &mut Vec3) -> Option<Proximity> {
+fn locate(body: &ContactBody, h: f32, start: Vec3, x: &mut Vec3) -> Option<Proximity> {
     let start = start + h * body.state.velocity_at(start);
     let path = *x - start;
     let entry = (path.length() > body.thickness && !body.shape.contains_point(&body.state.pose, start))
@@ -264,7 +274,7 @@ fn locate(body: &ContactBody<'_>, h: f32, start: Vec3, x: &mut Vec3) -> Option<P
 /// Moves a particle closer to the body than the contact thickness out to it along the
 /// normal, and returns the body's surface velocity there and the particle's velocity
 /// relative to it.
-fn put_back(body: &ContactBody<'_>, near: Proximity, p: &mut Particle<'_>) -> (Vec3, Vec3) {
+fn put_back(body: &ContactBody, near: Proximity, p: &mut Particle<'_>) -> (Vec3, Vec3) {
     *p.x += (body.thickness - near.signed).max(0.0) * near.outward;
     let surface = body.state.velocity_at(*p.x);
     (surface, *p.v - surface)
@@ -274,7 +284,7 @@ fn put_back(body: &ContactBody<'_>, near: Proximity, p: &mut Particle<'_>) -> (V
 /// the surface removed, and Coulomb friction bounded by μ times the velocity removed (to
 /// zero if that suffices: sticking). Friction also takes back the sliding the step made
 /// (`Δx = h Δv_t`), so a sticking particle does not creep by `h² g sin θ` a step.
-fn slide(body: &ContactBody<'_>, near: Proximity, p: &mut Particle<'_>, h: f32, totals: &mut ContactTotals) -> bool {
+fn slide(body: &ContactBody, near: Proximity, p: &mut Particle<'_>, h: f32, totals: &mut ContactTotals) -> bool {
     let outward = near.outward;
     let (surface, relative) = put_back(body, near, p);
     let approach = relative.dot(outward);
@@ -304,7 +314,7 @@ fn slide(body: &ContactBody<'_>, near: Proximity, p: &mut Particle<'_>, h: f32, 
 
 /// Bricis's restrain-on-contact (B5): put back at the contact thickness, the whole step's
 /// motion relative to the body taken back, and moving with the body from then on.
-fn stick(body: &ContactBody<'_>, near: Proximity, p: &mut Particle<'_>, h: f32, totals: &mut ContactTotals) -> bool {
+fn stick(body: &ContactBody, near: Proximity, p: &mut Particle<'_>, h: f32, totals: &mut ContactTotals) -> bool {
     let outward = near.outward;
     let (surface, relative) = put_back(body, near, p);
     let approach = relative.dot(outward);
@@ -323,7 +333,7 @@ fn stick(body: &ContactBody<'_>, near: Proximity, p: &mut Particle<'_>, h: f32, 
 /// (`Δv = h F / m`, and the position moves by `h Δv`). Returns whether the particle is in
 /// contact (cases 2 and 3) rather than only near.
 fn respond_in_regimes(
-    body: &ContactBody<'_>,
+    body: &ContactBody,
     regimes: &Regimes,
     near: Proximity,
     p: &mut Particle<'_>,
@@ -371,7 +381,7 @@ mod tests {
 
     /// Resolves one body against particles `x`, `v` of unit inverse mass and area, with no
     /// implicit support, after a step of `h` from `start`.
-    fn resolve(body: ContactBody<'_>, h: f32, start: &[Vec3], x: &mut [Vec3], v: &mut [Vec3]) -> ContactTotals {
+    fn resolve(body: ContactBody, h: f32, start: &[Vec3], x: &mut [Vec3], v: &mut [Vec3]) -> ContactTotals {
         let ones = vec![1.0; x.len()];
         let support = vec![Vec3::ZERO; x.len()];
         resolve_body_contacts(
@@ -385,7 +395,7 @@ mod tests {
             x,
             v,
             &mut Vec::new(),
-            &mut Vec::new(),
+            &mut BodyContactOutput::default(),
         )
     }
 
@@ -396,11 +406,16 @@ mod tests {
     #[test]
     fn a_particle_below_the_ground_is_put_back_and_slowed_by_friction() {
         let (shape, state) = ground();
-        let body =
-            ContactBody { shape: &shape, state, friction: 0.5, thickness: 0.0, response: ContactResponse::Slide };
+        let body = ContactBody {
+            shape: SharedShape::new(shape),
+            state,
+            friction: 0.5,
+            thickness: 0.0,
+            response: ContactResponse::Slide,
+        };
         let mut x = [Vec3::new(0.3, -0.01, 0.0), Vec3::new(0.0, 1.0, 0.0)];
         let mut v = [Vec3::new(2.0, -1.0, 0.0), Vec3::new(0.0, -1.0, 0.0)];
-        let mut loads = Vec::new();
+        let mut output = BodyContactOutput::default();
         let totals = resolve_body_contacts(
             &[body],
             &[2.0, 2.0],
@@ -412,8 +427,9 @@ mod tests {
             &mut x,
             &mut v,
             &mut Vec::new(),
-            &mut loads,
+            &mut output,
         );
+        let loads = output.loads;
         assert!(x[0].y.abs() < 1e-7);
         assert!((v[0] - Vec3::new(1.5, 0.0, 0.0)).length() < 1e-6);
         assert_eq!(v[1], Vec3::new(0.0, -1.0, 0.0), "particles above the plane are untouched");
@@ -432,8 +448,13 @@ mod tests {
     fn enough_friction_makes_a_particle_stick_and_a_moving_surface_carries_it() {
         let (shape, mut state) = ground();
         state.linear = Vec3::new(0.3, 0.0, 0.0);
-        let body =
-            ContactBody { shape: &shape, state, friction: 2.0, thickness: 0.001, response: ContactResponse::Slide };
+        let body = ContactBody {
+            shape: SharedShape::new(shape),
+            state,
+            friction: 2.0,
+            thickness: 0.001,
+            response: ContactResponse::Slide,
+        };
         let mut x = [Vec3::new(0.0, 0.0005, 0.0)];
         let mut v = [Vec3::new(0.5, -0.2, 0.0)];
         resolve(body, 0.0, &x.clone(), &mut x, &mut v);
@@ -446,8 +467,13 @@ mod tests {
         // A 2 mm plate; the particle jumps from 5 cm above to 5 cm below in one step.
         let plate = Cuboid::new(Vec3::new(1.0, 0.001, 1.0));
         let state = ColliderState { pose: Pose3::IDENTITY, linear: Vec3::ZERO, angular: Vec3::ZERO };
-        let body =
-            ContactBody { shape: &plate, state, friction: 0.0, thickness: 0.0005, response: ContactResponse::Slide };
+        let body = ContactBody {
+            shape: SharedShape::new(plate),
+            state,
+            friction: 0.0,
+            thickness: 0.0005,
+            response: ContactResponse::Slide,
+        };
         let start = [Vec3::new(0.1, 0.05, 0.0)];
         let mut x = [Vec3::new(0.1, -0.05, 0.0)];
         let mut v = [Vec3::new(0.0, -10.0, 0.0)];
@@ -460,8 +486,13 @@ mod tests {
     fn in_stick_mode_a_touching_particle_moves_with_the_body_even_when_pulled_away() {
         let (shape, mut state) = ground();
         state.linear = Vec3::new(0.2, 0.0, 0.0);
-        let body =
-            ContactBody { shape: &shape, state, friction: 0.0, thickness: 0.001, response: ContactResponse::Stick };
+        let body = ContactBody {
+            shape: SharedShape::new(shape),
+            state,
+            friction: 0.0,
+            thickness: 0.001,
+            response: ContactResponse::Stick,
+        };
         let start = [Vec3::new(0.0, 0.0008, 0.0)];
         let mut x = [Vec3::new(0.01, 0.0009, 0.0)];
         let mut v = [Vec3::new(1.0, 0.1, 0.0)];
@@ -487,7 +518,7 @@ mod tests {
             // 6 mm from the grown surface: pressure k (T_out − d) + c v_approach over h = 10 ms,
             // taken after the kick (backward Euler): divided by 1 + h (c + h k) = 1.01 + h c.
             let body = ContactBody {
-                shape: &shape,
+                shape: SharedShape::new(shape),
                 state,
                 friction: 0.0,
                 thickness: 0.001,
@@ -505,7 +536,13 @@ mod tests {
     #[test]
     fn within_t_surface_the_velocity_is_corrected_as_vassilev_and_spanlang_do() {
         let (shape, state) = ground();
-        let body = ContactBody { shape: &shape, state, friction: 0.0, thickness: 0.001, response: regimes(100.0, 0.0) };
+        let body = ContactBody {
+            shape: SharedShape::new(shape),
+            state,
+            friction: 0.0,
+            thickness: 0.001,
+            response: regimes(100.0, 0.0),
+        };
         let mut x = [Vec3::new(0.0, 0.002, 0.0)];
         let mut v = [Vec3::new(1.0, -0.5, 0.0)];
         let mut touching = Vec::new();
@@ -521,7 +558,7 @@ mod tests {
             &mut x,
             &mut v,
             &mut touching,
-            &mut Vec::new(),
+            &mut BodyContactOutput::default(),
         );
         // v = C_fric v_t − C_refl v_n, then the penalty 100 × 9 mm over 10 ms (backward Euler).
         assert!((v[0] - Vec3::new(0.5, 0.1 + 0.009 / 1.01, 0.0)).length() < 1e-6, "{}", v[0]);
@@ -532,7 +569,13 @@ mod tests {
     #[test]
     fn interference_is_corrected_in_position_and_velocity() {
         let (shape, state) = ground();
-        let body = ContactBody { shape: &shape, state, friction: 0.0, thickness: 0.001, response: regimes(100.0, 0.0) };
+        let body = ContactBody {
+            shape: SharedShape::new(shape),
+            state,
+            friction: 0.0,
+            thickness: 0.001,
+            response: regimes(100.0, 0.0),
+        };
         let mut x = [Vec3::new(0.0, -0.003, 0.0)];
         let mut v = [Vec3::new(0.0, -1.0, 0.0)];
         let totals = resolve(body, 0.01, &x.clone(), &mut x, &mut v);

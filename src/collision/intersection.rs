@@ -7,32 +7,46 @@ use glam::{DVec3, Vec3};
 /// crosses the interior of the other. Candidate pairs come from a sweep over the
 /// triangles' bounding boxes along X; the crossing test runs in double precision.
 pub fn count_self_intersections(x: &[Vec3], triangles: &[[u32; 3]]) -> usize {
-    let mut boxes: Vec<(Vec3, Vec3, usize)> = triangles
-        .iter()
-        .enumerate()
-        .map(|(t, tri)| {
+    IntersectionCounter::default().count(x, triangles)
+}
+
+/// [`count_self_intersections`] with its buffer kept between counts, for a probe that
+/// counts every frame.
+#[derive(Debug, Clone, Default)]
+pub struct IntersectionCounter {
+    /// Each triangle's bounding box and index.
+    boxes: Vec<(Vec3, Vec3, usize)>,
+}
+
+impl IntersectionCounter {
+    /// Number of pairs of triangles of `x` that share no vertex and intersect.
+    pub fn count(&mut self, x: &[Vec3], triangles: &[[u32; 3]]) -> usize {
+        let boxes = &mut self.boxes;
+        boxes.clear();
+        boxes.extend(triangles.iter().enumerate().map(|(t, tri)| {
             let [a, b, c] = tri.map(|p| x[p as usize]);
             (a.min(b).min(c), a.max(b).max(c), t)
-        })
-        .collect();
-    boxes.sort_by(|p, q| p.0.x.total_cmp(&q.0.x).then(p.2.cmp(&q.2)));
-    let mut count = 0;
-    for (k, &(min, max, t)) in boxes.iter().enumerate() {
-        for &(other_min, other_max, u) in boxes[k + 1..].iter().take_while(|b| b.0.x <= max.x) {
-            if other_min.cmpgt(max).any() || min.cmpgt(other_max).any() {
-                continue;
-            }
-            let (first, second) = (triangles[t], triangles[u]);
-            if first.iter().any(|v| second.contains(v)) {
-                continue;
-            }
-            let corners = |tri: [u32; 3]| tri.map(|p| x[p as usize].as_dvec3());
-            if triangles_intersect(corners(first), corners(second)) {
-                count += 1;
+        }));
+        // Unstable sort: the index breaks ties, and a stable sort would allocate.
+        boxes.sort_unstable_by(|p, q| p.0.x.total_cmp(&q.0.x).then(p.2.cmp(&q.2)));
+        let mut count = 0;
+        for (k, &(min, max, t)) in boxes.iter().enumerate() {
+            for &(other_min, other_max, u) in boxes[k + 1..].iter().take_while(|b| b.0.x <= max.x) {
+                if other_min.cmpgt(max).any() || min.cmpgt(other_max).any() {
+                    continue;
+                }
+                let (first, second) = (triangles[t], triangles[u]);
+                if first.iter().any(|v| second.contains(v)) {
+                    continue;
+                }
+                let corners = |tri: [u32; 3]| tri.map(|p| x[p as usize].as_dvec3());
+                if triangles_intersect(corners(first), corners(second)) {
+                    count += 1;
+                }
             }
         }
+        count
     }
-    count
 }
 
 /// Whether two triangles intersect: some edge of one crosses the other.

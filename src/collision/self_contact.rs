@@ -32,6 +32,7 @@ use super::primitives::{Sweep, closest_between_segments, closest_on_triangle};
 use super::untangle::Untangler;
 use crate::solver::PARALLEL_MIN_LEN;
 use crate::solver::elements::spring::outer;
+use crate::solver::gather::Gather;
 
 /// The cloths that collide with one another, as one mesh with global vertex numbers.
 #[derive(Debug, Clone, Default)]
@@ -171,6 +172,15 @@ pub struct SelfContactSolver {
     zone: Vec<u32>,
     /// Untangling of crossings found at the start of a step.
     untangler: Untangler,
+    /// Candidate pairs whose swept boxes meet.
+    pairs: Vec<Pair>,
+    /// Proximity contacts among the candidates.
+    contacts: Vec<Contact>,
+    /// Candidates whose paths touch.
+    hits: Vec<Pair>,
+    /// Per-task buffers for gathering pairs and contacts without allocating.
+    pair_gather: Gather<Pair>,
+    contact_gather: Gather<Contact>,
 }
 
 impl SelfContactSolver {
@@ -200,11 +210,11 @@ impl SelfContactSolver {
         self.initial_velocity.clone_from(&self.mean_velocity);
 
         // 1. Proximity at the start of the step.
-        let pairs = self.candidates(mesh, x0, x1);
-        let contacts: Vec<Contact> =
-            pairs.par_iter().with_min_len(PARALLEL_MIN_LEN).filter_map(|&pair| proximity(mesh, pair, h, x0)).collect();
-        report.proximity = contacts.len() as u32;
-        for contact in &contacts {
+        self.candidates(mesh, x0, x1);
+        let pairs = &self.pairs;
+        self.contact_gather.run(pairs.len(), &mut self.contacts, |i, out| out.extend(proximity(mesh, pairs[i], h, x0)));
+        report.proximity = self.contacts.len() as u32;
+        for contact in &self.contacts {
             apply(contact, mesh, &mut self.mean_velocity);
         }
         advance(x0, &self.mean_velocity, h, x1);
@@ -217,19 +227,19 @@ impl SelfContactSolver {
             .zip(&self.initial_velocity)
             .zip(x0)
             .fold(0.0f32, |m, ((x1, v), x0)| m.max((*x1 - (*x0 + h * *v)).length()));
-        let mut pairs = if moved < 0.5 * margin { Some(pairs) } else { None };
+        let mut fresh = moved < 0.5 * margin;
         let mut remaining = true;
         for _ in 0..IMPACT_PASSES {
-            let pairs = match pairs.take() {
-                Some(pairs) => pairs,
-                None => self.candidates(mesh, x0, x1),
-            };
-            let hits = impacts(mesh, &pairs, h, x0, x1);
-            if hits.is_empty() {
+            if !fresh {
+                self.candidates(mesh, x0, x1);
+            }
+            fresh = false;
+            self.impacts(mesh, h, x0, x1);
+            if self.hits.is_empty() {
                 remaining = false;
                 break;
             }
-            for &pair in &hits {
+            for &pair in &self.hits {
                 // Earlier impulses of this pass may have resolved or changed it.
                 if let Some(contact) = impact(mesh, pair, h, x0, x1) {
                     report.impacts += 1;
@@ -247,9 +257,9 @@ impl SelfContactSolver {
             self.zone.clear();
             self.zone.extend(0..mesh.len() as u32);
             loop {
-                let pairs = self.candidates(mesh, x0, x1);
-                let hits = impacts(mesh, &pairs, h, x0, x1);
-                if hits.is_empty() {
+                self.candidates(mesh, x0, x1);
+                self.impacts(mesh, h, x0, x1);
+                if self.hits.is_empty() {
                     break;
                 }
                 if report.zone_rounds == ZONE_ROUNDS {
@@ -263,7 +273,7 @@ impl SelfContactSolver {
                     break;
                 }
                 report.zone_rounds += 1;
-                for pair in hits {
+                for &pair in &self.hits {
                     let vertices = pair_vertices(mesh, pair);
                     for k in &vertices[1..] {
                         union(&mut self.zone, vertices[0], *k);
@@ -293,43 +303,53 @@ impl SelfContactSolver {
     }
 
     /// Refits the trees to the boxes swept from `x0` to `x1` (grown by the largest
-    /// separation) and lists the point–triangle and edge–edge pairs whose boxes meet,
-    /// leaving out pairs that share a vertex or hold one being untangled.
-    fn candidates(&mut self, mesh: &ContactMesh, x0: &[Vec3], x1: &[Vec3]) -> Vec<Pair> {
+    /// separation) and lists in `pairs` the point–triangle and edge–edge pairs whose boxes
+    /// meet, leaving out pairs that share a vertex or hold one being untangled: the points'
+    /// pairs first, each point's and each edge's sorted.
+    fn candidates(&mut self, mesh: &ContactMesh, x0: &[Vec3], x1: &[Vec3]) {
         self.refit(mesh, x0, x1);
-        let (triangle_tree, edge_tree) = (&self.triangle_tree, &self.edge_tree);
+        let (triangle_tree, edge_tree, edge_boxes) = (&self.triangle_tree, &self.edge_tree, &self.edge_boxes);
         let exempt = &self.untangler.exempt;
         let free = |vertices: &[u32]| !vertices.iter().any(|&k| exempt[k as usize]);
-        let point_pairs = (0..mesh.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).flat_map_iter(|p| {
-            let mut found = Vec::new();
-            if free(&[p]) {
-                triangle_tree.query(&swept_box(&[p], x0, x1), |t| {
-                    let triangle = &mesh.triangles[t as usize];
-                    if !triangle.contains(&p) && free(triangle) {
-                        found.push(t);
-                    }
-                });
-            }
-            found.sort_unstable();
-            found.into_iter().map(move |t| Pair::PointTriangle(p, t))
-        });
-        let edge_boxes = &self.edge_boxes;
-        let edge_pairs =
-            (0..mesh.edges.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).flat_map_iter(|e| {
-                let mut found = Vec::new();
+        let points = mesh.len();
+        self.pair_gather.run(points + mesh.edges.len(), &mut self.pairs, |i, out| {
+            let start = out.len();
+            if let Some(e) = i.checked_sub(points) {
+                let e = e as u32;
                 let [a, b] = mesh.edges[e as usize];
                 if free(&[a, b]) {
                     edge_tree.query(&edge_boxes[e as usize], |f| {
                         let [c, d] = mesh.edges[f as usize];
                         if f > e && a != c && a != d && b != c && b != d && free(&[c, d]) {
-                            found.push(f);
+                            out.push(Pair::EdgeEdge(e, f));
                         }
                     });
                 }
-                found.sort_unstable();
-                found.into_iter().map(move |f| Pair::EdgeEdge(e, f))
+            } else {
+                let p = i as u32;
+                if free(&[p]) {
+                    triangle_tree.query(&swept_box(&[p], x0, x1), |t| {
+                        let triangle = &mesh.triangles[t as usize];
+                        if !triangle.contains(&p) && free(triangle) {
+                            out.push(Pair::PointTriangle(p, t));
+                        }
+                    });
+                }
+            }
+            out[start..].sort_unstable_by_key(|pair| match *pair {
+                Pair::PointTriangle(_, other) | Pair::EdgeEdge(_, other) => other,
             });
-        point_pairs.chain(edge_pairs).collect()
+        });
+    }
+
+    /// Lists in `hits` the candidate pairs whose paths from `x0` to `x1` touch.
+    fn impacts(&mut self, mesh: &ContactMesh, h: f32, x0: &[Vec3], x1: &[Vec3]) {
+        let pairs = &self.pairs;
+        self.pair_gather.run(pairs.len(), &mut self.hits, |i, out| {
+            if impact(mesh, pairs[i], h, x0, x1).is_some() {
+                out.push(pairs[i]);
+            }
+        });
     }
 
     /// Refits the trees to the boxes of the primitives swept from `x0` to `x1`, grown by
@@ -480,16 +500,6 @@ fn proximity(mesh: &ContactMesh, pair: Pair, h: f32, x0: &[Vec3]) -> Option<Cont
         if n.dot(offset) < 0.0 { -n } else { n }
     };
     Some(Contact { stencil, normal, target: GAP_RECOVERY * (gap - distance) / h, friction })
-}
-
-/// Pairs whose paths from `x0` to `x1` touch, found in parallel.
-fn impacts(mesh: &ContactMesh, pairs: &[Pair], h: f32, x0: &[Vec3], x1: &[Vec3]) -> Vec<Pair> {
-    pairs
-        .par_iter()
-        .with_min_len(PARALLEL_MIN_LEN)
-        .copied()
-        .filter(|&pair| impact(mesh, pair, h, x0, x1).is_some())
-        .collect()
 }
 
 /// The continuous collision of a pair between `x0` and `x1`, if their paths touch: the

@@ -7,6 +7,7 @@ use super::{BendingHinges, MembraneTriangles, Springs, Triangles};
 use crate::solver::descent::Colouring;
 use crate::solver::elements::BlockPattern;
 use crate::solver::forces::ForceScratch;
+use crate::solver::implicit::VelocityConstraint;
 use crate::solver::integrate::IntegratorWorkspace;
 
 /// Compressed rows: for each particle, the list of items (springs, triangles) touching it,
@@ -155,6 +156,8 @@ pub struct SolverWorkspace {
     pub step_start: Vec<Vec3>,
     /// Impulse the implicit solve's contact constraints gave each particle this step [N·s].
     pub support: Vec<Vec3>,
+    /// The contact constraints of the current implicit step.
+    pub constraints: Vec<VelocityConstraint>,
 }
 
 /// What an embedding renderer needs each frame: vertex normals beside the particle

@@ -280,8 +280,9 @@ impl ForceModel<'_> {
     }
 
     /// Potential energy at positions `x` [J]: gravitational (zero at the origin) plus the
-    /// elastic energy of every spring, hinge and membrane triangle.
-    pub fn potential_energy(&self, x: &[Vec3]) -> f64 {
+    /// elastic energy of every spring, hinge and membrane triangle. `scratch` holds the
+    /// hinge angles.
+    pub fn potential_energy(&self, x: &[Vec3], scratch: &mut ForceScratch) -> f64 {
         let gravity: f64 = x.iter().zip(self.inv_mass).map(|(p, w)| -f64::from(self.gravity.dot(*p) / w)).sum();
         let springs: f64 = (0..self.springs.len())
             .map(|s| {
@@ -290,9 +291,10 @@ impl ForceModel<'_> {
             })
             .sum();
         let bending = self.hinges.view();
-        let mut delta = vec![0.0; self.hinges.vertices.len()];
-        bending.angles(x, &mut delta);
-        let hinges: f64 = (0..self.hinges.faces.len()).map(|f| f64::from(bending.face_energy(f, &delta))).sum();
+        let delta = &mut scratch.hinge_delta;
+        delta.resize(self.hinges.vertices.len(), 0.0);
+        bending.angles(x, delta);
+        let hinges: f64 = (0..self.hinges.faces.len()).map(|f| f64::from(bending.face_energy(f, delta))).sum();
         let material = &self.membranes.material;
         let membranes: f64 = (self.membranes.indices.iter().zip(&self.membranes.elements))
             .map(|(t, e)| f64::from(e.energy(material, t.map(|p| x[p as usize]))))

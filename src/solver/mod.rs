@@ -5,6 +5,7 @@ pub mod cfl;
 pub mod descent;
 pub mod elements;
 pub mod forces;
+pub mod gather;
 pub mod geometry;
 pub mod health;
 pub mod implicit;

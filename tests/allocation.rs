@@ -1,0 +1,74 @@
+//! The step allocates nothing once its buffers have grown to their working size (issue 5):
+//! a counting allocator watches whole frames after a few warm-up frames, with every
+//! integrator, body contact with friction, self-contact, strain limiting and the frame's
+//! probes. (Rigid props are left out: rapier3d's own step allocates a little.)
+
+mod common;
+
+use std::alloc::System;
+use std::sync::Mutex;
+
+use selvedge::Simulation;
+use selvedge::solver::integrate::Integrator;
+use stats_alloc::{INSTRUMENTED_SYSTEM, Region, StatsAlloc};
+
+#[global_allocator]
+static GLOBAL: &StatsAlloc<System> = &INSTRUMENTED_SYSTEM;
+
+/// The count is global: the tests of this file take turns, so that one's set-up is not
+/// counted in another's frames.
+static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
+
+/// Allocations and reallocations over `frames` frames after `warm_up` frames.
+fn allocations_after(sim: &mut Simulation, warm_up: u32, frames: u32) -> usize {
+    common::run_frames(sim, warm_up);
+    let region = Region::new(GLOBAL);
+    common::run_frames(sim, frames);
+    let change = region.change();
+    change.allocations + change.reallocations
+}
+
+/// A 9 × 9 sheet pinned at two corners, draped over a sphere with friction, colliding
+/// with itself, its strain limited, stepped by `integrator`.
+fn draped_sheet(integrator: Integrator) -> Simulation {
+    common::simulation(&format!(
+        "Scene(
+            name: \"draped\",
+            solver: (integrator: {integrator:?}, substeps: 60),
+            time: (fps: 60, duration_s: 1.0),
+            cloths: [(
+                name: \"sheet\",
+                shape: Grid(size: (0.4, 0.4), resolution: (9, 9)),
+                placement: (translation: (0.0, 0.12, 0.0), rotation_deg: (-90.0, 0.0, 0.0)),
+                material: (density: 0.2, membrane: Isotropic(young: 20.0, poisson: 0.3),
+                           bending: (warp: 1.0e-5, weft: 1.0e-5)),
+                strain_limit: (max_strain: 0.1),
+                pins: [Corners([TopLeft, TopRight])],
+                self_collision: (friction: 0.3),
+            )],
+            colliders: [(name: \"sphere\", shape: Sphere(radius: 0.1), friction: 0.3)],
+            ground: (enabled: true, height: -0.1, friction: 0.3),
+        )"
+    ))
+}
+
+#[test]
+fn a_warm_step_allocates_nothing_with_any_integrator() {
+    let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    for integrator in Integrator::ALL {
+        let mut sim = draped_sheet(integrator);
+        let count = allocations_after(&mut sim, 30, 3);
+        assert!(common::probe(&sim, "contact_force_n") > 0.0, "{integrator:?}: the sheet rests on the sphere");
+        assert_eq!(count, 0, "{integrator:?} allocated {count} times in 3 warm frames");
+    }
+}
+
+#[test]
+fn the_bench_scenes_allocate_nothing_once_warm() {
+    let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    for name in ["bench/hang_32.ron", "bench/sphere_64.ron", "twist.ron"] {
+        let mut sim = common::bundled(name);
+        let count = allocations_after(&mut sim, 3, 2);
+        assert_eq!(count, 0, "{name} allocated {count} times in 2 warm frames");
+    }
+}
