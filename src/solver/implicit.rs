@@ -116,6 +116,8 @@ pub struct ImplicitWorkspace {
     x: Vec<Vec3>,
     v: Vec<Vec3>,
     preconditioner: Vec<Mat3>,
+    /// Per chunk of [`VECTOR_CHUNK`] particles, the partial sums of the CG's dot products.
+    partials: Vec<[f64; 2]>,
     /// Per particle, the directions its Δv may take: identity (free), zero (pinned) or a
     /// projection off a contact normal.
     filter: Vec<Mat3>,
@@ -314,66 +316,121 @@ fn solve(
     }
 }
 
-/// Applies each particle's constraint filter.
-fn filter(values: &mut [Vec3], filters: &[Mat3]) {
-    for (value, filter) in values.iter_mut().zip(filters) {
-        *value = *filter * *value;
-    }
-}
+/// Particles per task in the conjugate gradients' vector kernels. Fixed, so that the
+/// partial sums of every dot product, and hence the iterates, are the same on any number
+/// of threads.
+const VECTOR_CHUNK: usize = 2048;
 
-/// `out = P · residual` for the block-Jacobi preconditioner `P`.
-fn precondition(residual: &[Vec3], preconditioner: &[Mat3], out: &mut [Vec3]) {
-    out.par_iter_mut()
-        .zip(residual.par_iter())
-        .zip(preconditioner.par_iter())
-        .with_min_len(PARALLEL_MIN_LEN)
-        .for_each(|((o, r), p)| *o = *p * *r);
+/// The per-chunk partial sums added in chunk order.
+fn total(partials: &[[f64; 2]]) -> [f64; 2] {
+    partials.iter().fold([0.0; 2], |[a, b], [p, q]| [a + p, b + q])
 }
 
 /// Solves `system · delta = rhs` within the constraint filters, with block-Jacobi
 /// preconditioned conjugate gradients (Baraff & Witkin's modified PCG): `delta` starts as
 /// given and only moves within the filters. Returns the iterations taken. Stops early on
 /// a direction of non-positive curvature, which a semi-definite assembly should not give.
+/// The vector work runs in parallel over fixed chunks of particles, each pass computing
+/// the dot products it needs on the way, summed in chunk order.
 fn conjugate_gradient(pattern: &BlockPattern, settings: &ImplicitSettings, ws: &mut ImplicitWorkspace) -> u32 {
-    ws.preconditioner.clear();
-    ws.preconditioner.extend((0..ws.filter.len()).map(|i| {
-        let block = ws.system.block(pattern, i as u32, i as u32);
-        if block.determinant().abs() > 0.0 { block.inverse() } else { Mat3::IDENTITY }
-    }));
-    ws.system.multiply(pattern, &ws.delta, &mut ws.product);
-    for i in 0..ws.residual.len() {
-        ws.residual[i] = ws.rhs[i] - ws.product[i];
-    }
-    filter(&mut ws.residual, &ws.filter);
-    precondition(&ws.residual, &ws.preconditioner, &mut ws.preconditioned);
-    filter(&mut ws.preconditioned, &ws.filter);
-    ws.direction.copy_from_slice(&ws.preconditioned);
-    let filtered_rhs: f64 = ws.rhs.iter().zip(&ws.filter).map(|(r, s)| f64::from((*s * *r).length_squared())).sum();
-    let target = f64::from(settings.cg_tolerance).powi(2) * filtered_rhs;
-    let mut rz = dot(&ws.residual, &ws.preconditioned);
+    const C: usize = VECTOR_CHUNK;
+    let ImplicitWorkspace {
+        system,
+        rhs,
+        delta,
+        residual,
+        preconditioned,
+        direction,
+        product,
+        preconditioner,
+        partials,
+        filter,
+        ..
+    } = ws;
+    (0..filter.len())
+        .into_par_iter()
+        .with_min_len(PARALLEL_MIN_LEN)
+        .map(|i| {
+            let block = system.block(pattern, i as u32, i as u32);
+            if block.determinant().abs() > 0.0 { block.inverse() } else { Mat3::IDENTITY }
+        })
+        .collect_into_vec(preconditioner);
+    let (filter, preconditioner, rhs) = (&*filter, &*preconditioner, &*rhs);
+    // z = S P r, and the particle's share of r·z and r·r.
+    let precondition = |i: usize, r: Vec3, z: &mut Vec3| {
+        *z = filter[i] * (preconditioner[i] * r);
+        [f64::from(r.dot(*z)), f64::from(r.length_squared())]
+    };
+    let add = |[a, b]: [f64; 2], [p, q]: [f64; 2]| [a + p, b + q];
+
+    // r = S (b − A δ), z = S P r, d = z.
+    system.multiply(pattern, delta, product);
+    residual
+        .par_chunks_mut(C)
+        .zip(preconditioned.par_chunks_mut(C))
+        .zip(direction.par_chunks_mut(C))
+        .zip(product.par_chunks(C))
+        .enumerate()
+        .map(|(c, (((r, z), d), q))| {
+            (0..r.len()).fold([0.0; 2], |sums, k| {
+                let i = c * C + k;
+                r[k] = filter[i] * (rhs[i] - q[k]);
+                let share = precondition(i, r[k], &mut z[k]);
+                d[k] = z[k];
+                add(sums, share)
+            })
+        })
+        .collect_into_vec(partials);
+    let [mut rz, mut rr] = total(partials);
+    rhs.par_chunks(C)
+        .enumerate()
+        .map(|(c, b)| [(0..b.len()).map(|k| f64::from((filter[c * C + k] * b[k]).length_squared())).sum(), 0.0])
+        .collect_into_vec(partials);
+    let target = f64::from(settings.cg_tolerance).powi(2) * total(partials)[0];
     for iteration in 0..settings.cg_max_iterations {
-        if dot(&ws.residual, &ws.residual) <= target {
+        if rr <= target {
             return iteration;
         }
-        ws.system.multiply(pattern, &ws.direction, &mut ws.product);
-        filter(&mut ws.product, &ws.filter);
-        let curvature = dot(&ws.direction, &ws.product);
+        // q = S A d, and d·q.
+        system.multiply(pattern, direction, product);
+        product
+            .par_chunks_mut(C)
+            .zip(direction.par_chunks(C))
+            .enumerate()
+            .map(|(c, (q, d))| {
+                let curvature = (0..q.len()).fold(0.0, |sum, k| {
+                    q[k] = filter[c * C + k] * q[k];
+                    sum + f64::from(d[k].dot(q[k]))
+                });
+                [curvature, 0.0]
+            })
+            .collect_into_vec(partials);
+        let curvature = total(partials)[0];
         if curvature <= 0.0 {
             return iteration;
         }
+        // δ += α d, r −= α q, z = S P r, with α = r·z / d·q.
         let step = (rz / curvature) as f32;
-        for i in 0..ws.delta.len() {
-            ws.delta[i] += step * ws.direction[i];
-            ws.residual[i] -= step * ws.product[i];
-        }
-        precondition(&ws.residual, &ws.preconditioner, &mut ws.preconditioned);
-        filter(&mut ws.preconditioned, &ws.filter);
-        let next = dot(&ws.residual, &ws.preconditioned);
+        delta
+            .par_chunks_mut(C)
+            .zip(residual.par_chunks_mut(C))
+            .zip(preconditioned.par_chunks_mut(C))
+            .zip(direction.par_chunks(C).zip(product.par_chunks(C)))
+            .enumerate()
+            .map(|(c, (((x, r), z), (d, q)))| {
+                (0..x.len()).fold([0.0; 2], |sums, k| {
+                    x[k] += step * d[k];
+                    r[k] -= step * q[k];
+                    add(sums, precondition(c * C + k, r[k], &mut z[k]))
+                })
+            })
+            .collect_into_vec(partials);
+        let [next, next_rr] = total(partials);
         let ratio = (next / rz) as f32;
-        rz = next;
-        for i in 0..ws.direction.len() {
-            ws.direction[i] = ws.preconditioned[i] + ratio * ws.direction[i];
-        }
+        (rz, rr) = (next, next_rr);
+        direction.par_iter_mut().zip(preconditioned.par_iter()).with_min_len(PARALLEL_MIN_LEN).for_each(|(d, z)| {
+            *d = *z + ratio * *d;
+        });
     }
     settings.cg_max_iterations
 }
