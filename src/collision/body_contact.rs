@@ -500,30 +500,27 @@ mod tests {
         assert_eq!(v[0], Vec3::new(0.2, 0.0, 0.0));
         assert!((x[0] - Vec3::new(0.002, 0.001, 0.0)).length() < 1e-6, "moved with the body: {}", x[0]);
     }
-    fn regimes(stiffness: f32, damping: f32) -> ContactResponse {
-        ContactResponse::Regimes(Regimes {
-            outside: 0.01,
-            surface: 0.002,
-            stiffness,
-            damping,
-            tangential: 0.5,
-            restitution: 0.2,
-        })
+    /// The frictionless ground, 1 mm thick, in Durupınar's regimes: thresholds 10 mm and
+    /// 2 mm, penalty stiffness 100 and the given damping, C_fric 0.5, C_refl 0.2.
+    fn regimes_ground(damping: f32) -> ContactBody {
+        let (shape, state) = ground();
+        let regimes =
+            Regimes { outside: 0.01, surface: 0.002, stiffness: 100.0, damping, tangential: 0.5, restitution: 0.2 };
+        ContactBody {
+            shape: SharedShape::new(shape),
+            state,
+            friction: 0.0,
+            thickness: 0.001,
+            response: ContactResponse::Regimes(regimes),
+        }
     }
 
     #[test]
     fn within_t_outside_only_the_damped_penalty_acts() {
-        let (shape, state) = ground();
         for (damping, kick) in [(0.0, 0.004 / 1.01), (2.0, 0.006 / 1.03)] {
             // 6 mm from the grown surface: pressure k (T_out − d) + c v_approach over h = 10 ms,
             // taken after the kick (backward Euler): divided by 1 + h (c + h k) = 1.01 + h c.
-            let body = ContactBody {
-                shape: SharedShape::new(shape),
-                state,
-                friction: 0.0,
-                thickness: 0.001,
-                response: regimes(100.0, damping),
-            };
+            let body = regimes_ground(damping);
             let mut x = [Vec3::new(0.0, 0.007, 0.0)];
             let mut v = [Vec3::new(0.3, -0.1, 0.0)];
             let totals = resolve(body, 0.01, &x.clone(), &mut x, &mut v);
@@ -535,14 +532,7 @@ mod tests {
 
     #[test]
     fn within_t_surface_the_velocity_is_corrected_as_vassilev_and_spanlang_do() {
-        let (shape, state) = ground();
-        let body = ContactBody {
-            shape: SharedShape::new(shape),
-            state,
-            friction: 0.0,
-            thickness: 0.001,
-            response: regimes(100.0, 0.0),
-        };
+        let body = regimes_ground(0.0);
         let mut x = [Vec3::new(0.0, 0.002, 0.0)];
         let mut v = [Vec3::new(1.0, -0.5, 0.0)];
         let mut touching = Vec::new();
@@ -568,14 +558,7 @@ mod tests {
 
     #[test]
     fn interference_is_corrected_in_position_and_velocity() {
-        let (shape, state) = ground();
-        let body = ContactBody {
-            shape: SharedShape::new(shape),
-            state,
-            friction: 0.0,
-            thickness: 0.001,
-            response: regimes(100.0, 0.0),
-        };
+        let body = regimes_ground(0.0);
         let mut x = [Vec3::new(0.0, -0.003, 0.0)];
         let mut v = [Vec3::new(0.0, -1.0, 0.0)];
         let totals = resolve(body, 0.01, &x.clone(), &mut x, &mut v);
