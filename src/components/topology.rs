@@ -9,6 +9,7 @@ use crate::solver::elements::BlockPattern;
 use crate::solver::forces::ForceScratch;
 use crate::solver::implicit::VelocityConstraint;
 use crate::solver::integrate::IntegratorWorkspace;
+use crate::solver::multigrid::Hierarchy;
 
 /// Compressed rows: for each particle, the list of items (springs, triangles) touching it,
 /// in ascending item order so that sums over them are deterministic.
@@ -88,6 +89,8 @@ pub struct ClothTopology {
     pub membrane_slots: Vec<[[u32; 3]; 3]>,
     /// The particles in groups that share no element, for block descent's parallel sweeps.
     pub colouring: Colouring,
+    /// The particles grouped level by level, for the multigrid preconditioner.
+    pub hierarchy: Hierarchy,
     /// Inverse mass with pinned particles at zero [1/kg]: what the integrators accelerate.
     pub free_inv_mass: Vec<f32>,
     /// How many times this cache was built; lets tests see it is not rebuilt every step.
@@ -133,6 +136,7 @@ impl ClothTopology {
             face_slots: hinges.faces.iter().map(|f| pattern.stencil_slots(f.vertices)).collect(),
             membrane_slots: membranes.indices.iter().map(|&t| pattern.stencil_slots(t)).collect(),
             colouring: Colouring::greedy(&pattern),
+            hierarchy: Hierarchy::build(&pattern),
             pattern,
             free_inv_mass,
             builds,

@@ -6,7 +6,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 use rapier3d::prelude::{ColliderBuilder, PhysicsWorld, RigidBodyBuilder};
 
-use super::format::{ClothDesc, EditActionDesc, LimitedEdgesDesc, RayleighDesc, Scene, ShapeDesc};
+use super::format::{ClothDesc, EditActionDesc, LimitedEdgesDesc, Preconditioner, RayleighDesc, Scene, ShapeDesc};
 use super::load::SceneError;
 use super::validate::{TimePlan, time_plan};
 use crate::builders::ClothData;
@@ -309,7 +309,10 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
                 cg_tolerance: scene.solver.cg_tolerance,
                 cg_max_iterations: scene.solver.cg_max_iterations,
                 newton_iterations: scene.solver.newton_iterations,
-                linear_solver: LinearSolver::ConjugateGradient,
+                linear_solver: match scene.solver.preconditioner {
+                    Preconditioner::BlockJacobi => LinearSolver::ConjugateGradient,
+                    Preconditioner::Multigrid => LinearSolver::Multigrid,
+                },
             },
             descent: DescentSettings {
                 sweeps: scene.solver.descent.sweeps,

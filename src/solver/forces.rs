@@ -10,6 +10,7 @@ use super::elements::hinge::hinge_angle;
 use super::elements::{BlockMatrix, BlockPattern, SpringElement};
 use super::implicit::LinearDynamics;
 use super::integrate::Dynamics;
+use super::multigrid::Hierarchy;
 use crate::components::{BendingHinges, ClothTopology, MembraneTriangles, Springs};
 
 /// Air around the cloth.
@@ -339,6 +340,10 @@ impl LinearDynamics for ClothDynamics<'_> {
 
     fn colouring(&self) -> &Colouring {
         &self.model.topology.colouring
+    }
+
+    fn hierarchy(&self) -> &Hierarchy {
+        &self.model.topology.hierarchy
     }
 
     fn linearize(

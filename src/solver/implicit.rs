@@ -26,6 +26,7 @@ use super::descent::{Colouring, DescentSettings, DescentWorkspace, descend};
 use super::elements::spring::outer;
 use super::elements::{BlockMatrix, BlockPattern};
 use super::integrate::{Dynamics, StepReport};
+use super::multigrid::{Hierarchy, Multigrid};
 
 /// Rayleigh damping `C = αM + βK_s` (K_s the stiffness, `−∂f/∂x`).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -70,6 +71,10 @@ pub enum LinearSolver {
     /// Block-Jacobi preconditioned conjugate gradients to `cg_tolerance`: accurate, but
     /// on stiff cloth at frame-sized steps it takes hundreds of iterations.
     ConjugateGradient,
+    /// Conjugate gradients to `cg_tolerance` preconditioned by a smoothed-aggregation
+    /// multigrid V-cycle ([`super::multigrid`]): each iteration costs about four of block
+    /// Jacobi's, but the iterations no longer grow with the cloth's size and stiffness.
+    Multigrid,
     /// Coloured block Gauss–Seidel with Chebyshev acceleration ([`super::descent`]): a
     /// fixed number of parallel sweeps, stopping early at `cg_tolerance`.
     BlockDescent(DescentSettings),
@@ -86,6 +91,8 @@ pub trait LinearDynamics: Dynamics {
     fn is_free(&self, i: usize) -> bool;
     /// The particles grouped so that no two of a group share a block of the pattern.
     fn colouring(&self) -> &Colouring;
+    /// The particles grouped level by level, for the multigrid preconditioner.
+    fn hierarchy(&self) -> &Hierarchy;
     /// Forces [N] and their semi-definite derivatives at `(x, v, t)`.
     fn linearize(
         &mut self,
@@ -117,7 +124,7 @@ pub struct ImplicitWorkspace {
     v: Vec<Vec3>,
     preconditioner: Vec<Mat3>,
     /// Per chunk of [`VECTOR_CHUNK`] particles, the partial sums of the CG's dot products.
-    partials: Vec<[f64; 2]>,
+    partials: Vec<f64>,
     /// Per particle, the directions its Δv may take: identity (free), zero (pinned) or a
     /// projection off a contact normal.
     filter: Vec<Mat3>,
@@ -125,6 +132,8 @@ pub struct ImplicitWorkspace {
     prescribed: Vec<Vec3>,
     /// Block descent's buffers.
     descent: DescentWorkspace,
+    /// The multigrid preconditioner's levels.
+    multigrid: Multigrid,
     /// Impulse each contact constraint applied in the last step [N·s], parallel to the
     /// constraints passed to [`implicit_step`].
     pub constraint_impulses: Vec<Vec3>,
@@ -301,7 +310,8 @@ fn solve(
     }
     let pattern = dynamics.pattern();
     match settings.linear_solver {
-        LinearSolver::ConjugateGradient => conjugate_gradient(pattern, settings, ws),
+        LinearSolver::ConjugateGradient => conjugate_gradient(pattern, None, settings, ws),
+        LinearSolver::Multigrid => conjugate_gradient(pattern, Some(dynamics.hierarchy()), settings, ws),
         LinearSolver::BlockDescent(descent) => descend(
             pattern,
             dynamics.colouring(),
@@ -322,17 +332,23 @@ fn solve(
 const VECTOR_CHUNK: usize = 2048;
 
 /// The per-chunk partial sums added in chunk order.
-fn total(partials: &[[f64; 2]]) -> [f64; 2] {
-    partials.iter().fold([0.0; 2], |[a, b], [p, q]| [a + p, b + q])
+fn total(partials: &[f64]) -> f64 {
+    partials.iter().sum()
 }
 
-/// Solves `system · delta = rhs` within the constraint filters, with block-Jacobi
-/// preconditioned conjugate gradients (Baraff & Witkin's modified PCG): `delta` starts as
-/// given and only moves within the filters. Returns the iterations taken. Stops early on
-/// a direction of non-positive curvature, which a semi-definite assembly should not give.
-/// The vector work runs in parallel over fixed chunks of particles, each pass computing
-/// the dot products it needs on the way, summed in chunk order.
-fn conjugate_gradient(pattern: &BlockPattern, settings: &ImplicitSettings, ws: &mut ImplicitWorkspace) -> u32 {
+/// Solves `system · delta = rhs` within the constraint filters by preconditioned conjugate
+/// gradients (Baraff & Witkin's modified PCG): `delta` starts as given and only moves
+/// within the filters. The preconditioner is a multigrid V-cycle over `hierarchy` if
+/// given, else block Jacobi. Returns the iterations taken. Stops early on a direction of
+/// non-positive curvature, which a semi-definite assembly should not give. The vector work
+/// runs in parallel over fixed chunks of particles, each pass computing the dot products it
+/// needs on the way, summed in chunk order.
+fn conjugate_gradient(
+    pattern: &BlockPattern,
+    hierarchy: Option<&Hierarchy>,
+    settings: &ImplicitSettings,
+    ws: &mut ImplicitWorkspace,
+) -> u32 {
     const C: usize = VECTOR_CHUNK;
     let ImplicitWorkspace {
         system,
@@ -345,48 +361,65 @@ fn conjugate_gradient(pattern: &BlockPattern, settings: &ImplicitSettings, ws: &
         preconditioner,
         partials,
         filter,
+        multigrid,
         ..
     } = ws;
-    (0..filter.len())
-        .into_par_iter()
-        .with_min_len(PARALLEL_MIN_LEN)
-        .map(|i| {
-            let block = system.block(pattern, i as u32, i as u32);
-            if block.determinant().abs() > 0.0 { block.inverse() } else { Mat3::IDENTITY }
-        })
-        .collect_into_vec(preconditioner);
-    let (filter, preconditioner, rhs) = (&*filter, &*preconditioner, &*rhs);
-    // z = S P r, and the particle's share of r·z and r·r.
-    let precondition = |i: usize, r: Vec3, z: &mut Vec3| {
-        *z = filter[i] * (preconditioner[i] * r);
-        [f64::from(r.dot(*z)), f64::from(r.length_squared())]
+    match hierarchy {
+        Some(hierarchy) => multigrid.setup(hierarchy, pattern, system, filter),
+        None => (0..filter.len())
+            .into_par_iter()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .map(|i| {
+                let block = system.block(pattern, i as u32, i as u32);
+                if block.determinant().abs() > 0.0 { block.inverse() } else { Mat3::IDENTITY }
+            })
+            .collect_into_vec(preconditioner),
+    }
+    let (filter, rhs) = (&*filter, &*rhs);
+    // z = M⁻¹ r, returning r·z.
+    let mut precondition = |r: &[Vec3], z: &mut [Vec3], partials: &mut Vec<f64>| {
+        if let Some(hierarchy) = hierarchy {
+            multigrid.apply(hierarchy, pattern, system, filter, r, z);
+        }
+        let jacobi = hierarchy.is_none().then_some(&*preconditioner);
+        z.par_chunks_mut(C)
+            .zip(r.par_chunks(C))
+            .enumerate()
+            .map(|(c, (z, r))| {
+                (0..z.len()).fold(0.0, |sum, k| {
+                    if let Some(jacobi) = jacobi {
+                        let i = c * C + k;
+                        z[k] = filter[i] * (jacobi[i] * r[k]);
+                    }
+                    sum + f64::from(r[k].dot(z[k]))
+                })
+            })
+            .collect_into_vec(partials);
+        total(partials)
     };
-    let add = |[a, b]: [f64; 2], [p, q]: [f64; 2]| [a + p, b + q];
 
-    // r = S (b − A δ), z = S P r, d = z.
+    // r = S (b − A δ), z = M⁻¹ r, d = z.
     system.multiply(pattern, delta, product);
     residual
         .par_chunks_mut(C)
-        .zip(preconditioned.par_chunks_mut(C))
-        .zip(direction.par_chunks_mut(C))
         .zip(product.par_chunks(C))
         .enumerate()
-        .map(|(c, (((r, z), d), q))| {
-            (0..r.len()).fold([0.0; 2], |sums, k| {
+        .map(|(c, (r, q))| {
+            (0..r.len()).fold(0.0, |sum, k| {
                 let i = c * C + k;
                 r[k] = filter[i] * (rhs[i] - q[k]);
-                let share = precondition(i, r[k], &mut z[k]);
-                d[k] = z[k];
-                add(sums, share)
+                sum + f64::from(r[k].length_squared())
             })
         })
         .collect_into_vec(partials);
-    let [mut rz, mut rr] = total(partials);
+    let mut rr = total(partials);
+    let mut rz = precondition(residual, preconditioned, partials);
+    direction.copy_from_slice(preconditioned);
     rhs.par_chunks(C)
         .enumerate()
-        .map(|(c, b)| [(0..b.len()).map(|k| f64::from((filter[c * C + k] * b[k]).length_squared())).sum(), 0.0])
+        .map(|(c, b)| (0..b.len()).map(|k| f64::from((filter[c * C + k] * b[k]).length_squared())).sum())
         .collect_into_vec(partials);
-    let target = f64::from(settings.cg_tolerance).powi(2) * total(partials)[0];
+    let target = f64::from(settings.cg_tolerance).powi(2) * total(partials);
     for iteration in 0..settings.cg_max_iterations {
         if rr <= target {
             return iteration;
@@ -398,36 +431,34 @@ fn conjugate_gradient(pattern: &BlockPattern, settings: &ImplicitSettings, ws: &
             .zip(direction.par_chunks(C))
             .enumerate()
             .map(|(c, (q, d))| {
-                let curvature = (0..q.len()).fold(0.0, |sum, k| {
+                (0..q.len()).fold(0.0, |sum, k| {
                     q[k] = filter[c * C + k] * q[k];
                     sum + f64::from(d[k].dot(q[k]))
-                });
-                [curvature, 0.0]
+                })
             })
             .collect_into_vec(partials);
-        let curvature = total(partials)[0];
+        let curvature = total(partials);
         if curvature <= 0.0 {
             return iteration;
         }
-        // δ += α d, r −= α q, z = S P r, with α = r·z / d·q.
+        // δ += α d, r −= α q, with α = r·z / d·q; then z = M⁻¹ r.
         let step = (rz / curvature) as f32;
         delta
             .par_chunks_mut(C)
             .zip(residual.par_chunks_mut(C))
-            .zip(preconditioned.par_chunks_mut(C))
             .zip(direction.par_chunks(C).zip(product.par_chunks(C)))
-            .enumerate()
-            .map(|(c, (((x, r), z), (d, q)))| {
-                (0..x.len()).fold([0.0; 2], |sums, k| {
+            .map(|((x, r), (d, q))| {
+                (0..x.len()).fold(0.0, |sum, k| {
                     x[k] += step * d[k];
                     r[k] -= step * q[k];
-                    add(sums, precondition(c * C + k, r[k], &mut z[k]))
+                    sum + f64::from(r[k].length_squared())
                 })
             })
             .collect_into_vec(partials);
-        let [next, next_rr] = total(partials);
+        rr = total(partials);
+        let next = precondition(residual, preconditioned, partials);
         let ratio = (next / rz) as f32;
-        (rz, rr) = (next, next_rr);
+        rz = next;
         direction.par_iter_mut().zip(preconditioned.par_iter()).with_min_len(PARALLEL_MIN_LEN).for_each(|(d, z)| {
             *d = *z + ratio * *d;
         });

@@ -10,6 +10,7 @@ pub mod geometry;
 pub mod health;
 pub mod implicit;
 pub mod integrate;
+pub mod multigrid;
 pub mod ordering;
 pub mod pins;
 pub mod probes;

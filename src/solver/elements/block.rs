@@ -44,6 +44,16 @@ impl BlockPattern {
         self.offsets.len().saturating_sub(1)
     }
 
+    /// The columns of row `i`.
+    pub fn row(&self, i: usize) -> &[u32] {
+        &self.columns[self.offsets[i] as usize..self.offsets[i + 1] as usize]
+    }
+
+    /// The row a slot belongs to.
+    pub fn row_of(&self, slot: usize) -> usize {
+        self.offsets.partition_point(|&o| o as usize <= slot) - 1
+    }
+
     /// Index of block `(row, column)` in the block storage, if it exists.
     pub fn slot(&self, row: u32, column: u32) -> Option<u32> {
         let (start, end) = (self.offsets[row as usize] as usize, self.offsets[row as usize + 1] as usize);

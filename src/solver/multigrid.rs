@@ -1,0 +1,683 @@
+//! Smoothed-aggregation multigrid (Vaněk, Mandel & Brezina 1996): the preconditioner that
+//! lets conjugate gradients solve a stiff cloth's implicit step in tens of iterations
+//! instead of hundreds.
+//!
+//! Block Jacobi only reaches a particle's neighbours per iteration, so the slow, smooth
+//! modes of a large stiff sheet (the whole sheet swinging and stretching under its weight)
+//! take as many iterations as the sheet is wide. Multigrid solves those modes on coarser
+//! copies of the cloth: particles are grouped into aggregates of a neighbourhood each, an
+//! aggregate moves as one (the tentative prolongator, three translations per aggregate),
+//! one damped Jacobi step smooths that prolongator so that neighbouring aggregates blend,
+//! and the coarse matrix is the Galerkin product `Pᵀ A P`. Levels repeat until a few dozen
+//! nodes remain, solved exactly by dense Cholesky. A symmetric V-cycle with damped block
+//! Jacobi smoothing is then a fixed, symmetric positive definite preconditioner.
+//!
+//! The grouping depends only on the block pattern, so [`Hierarchy`] is built once per
+//! topology; the numbers ([`Multigrid`]) are rebuilt for each system, in buffers kept from
+//! step to step. Constraint filters `S` (pins, contact normals) act on the finest level:
+//! the prolongator is filtered, `S P`, so coarse corrections never move a pinned particle
+//! or cross a contact normal. Every kernel is a parallel loop over rows or blocks with a
+//! fixed order inside, so the result does not depend on the number of threads.
+
+use glam::{Mat3, Vec3};
+use rayon::prelude::*;
+
+use super::PARALLEL_MIN_LEN;
+use super::elements::{BlockMatrix, BlockPattern};
+
+/// Levels stop coarsening at this many nodes; the coarsest system is then factored
+/// densely (3 × 48 unknowns: a few hundred thousand flops).
+const COARSEST_NODES: usize = 48;
+
+/// A coarsening that keeps more than this share of the nodes has stalled (a pattern with
+/// no neighbours left to group), and the hierarchy stops there.
+const MIN_REDUCTION: f32 = 0.7;
+
+/// The largest coarsest level factored densely (a 600-unknown Cholesky, 7·10⁷ flops).
+const DENSE_LIMIT: usize = 200;
+
+/// Power iterations per setup for the spectral radius of the Jacobi-preconditioned matrix.
+const POWER_ITERATIONS: usize = 4;
+
+/// Factor on the power iterations' estimate of the spectral radius, which is from below.
+const RADIUS_MARGIN: f32 = 1.1;
+
+/// Damped Jacobi smoothing sweeps before and after each coarse correction.
+const SMOOTHING_SWEEPS: usize = 2;
+
+/// The structure of the levels: which nodes group into which aggregate, and the block
+/// patterns of the prolongators and coarse matrices. Depends only on the finest pattern.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Hierarchy {
+    /// From the finest level down, each coarsening of the level above.
+    coarsenings: Vec<Coarsening>,
+    /// Nodes of the coarsest level.
+    coarsest: usize,
+}
+
+/// One level's grouping into the next, coarser level: each aggregate becomes a node.
+#[derive(Debug, Clone, Default, PartialEq)]
+struct Coarsening {
+    /// Per node of this level, its aggregate.
+    aggregate: Vec<u32>,
+    /// Blocks of the smoothed prolongator `P` (rows: this level, columns: the coarser one):
+    /// row `i` holds the aggregates of `i`'s neighbours.
+    prolongation: BlockPattern,
+    /// `P` by columns: for coarse node `c`, the slots of `P` in column `c`, in row order.
+    restriction: BlockPattern,
+    /// The row of each slot of `restriction`.
+    restriction_rows: Vec<u32>,
+    /// Blocks of `A P`.
+    product: BlockPattern,
+    /// Blocks of the coarser level's matrix `Pᵀ A P`.
+    coarse: BlockPattern,
+}
+
+impl Hierarchy {
+    /// Groups the nodes of `pattern` level by level until [`COARSEST_NODES`] remain or the
+    /// grouping stalls.
+    pub fn build(pattern: &BlockPattern) -> Self {
+        let mut coarsenings: Vec<Coarsening> = Vec::new();
+        let mut current = pattern.clone();
+        while current.rows() > COARSEST_NODES {
+            let (aggregate, count) = aggregate(&current);
+            if count as f32 > MIN_REDUCTION * current.rows() as f32 {
+                break;
+            }
+            let prolongation = rows_of(current.rows(), |i, row| {
+                row.extend(current.row(i).iter().map(|&k| aggregate[k as usize]));
+            });
+            let product = rows_of(current.rows(), |i, row| {
+                for &k in current.row(i) {
+                    row.extend_from_slice(prolongation.row(k as usize));
+                }
+            });
+            let restriction = transpose(&prolongation, count);
+            let restriction_rows =
+                restriction.columns.iter().map(|&s| prolongation.row_of(s as usize) as u32).collect();
+            let coarse = rows_of(count, |c, row| {
+                for &slot in restriction.row(c) {
+                    row.extend_from_slice(product.row(prolongation.row_of(slot as usize)));
+                }
+            });
+            current = coarse.clone();
+            coarsenings.push(Coarsening { aggregate, prolongation, restriction, restriction_rows, product, coarse });
+        }
+        Self { coarsest: current.rows(), coarsenings }
+    }
+
+    /// Nodes per level, finest first.
+    pub fn sizes(&self) -> Vec<usize> {
+        let mut sizes: Vec<usize> = self.coarsenings.iter().map(|c| c.aggregate.len()).collect();
+        sizes.push(self.coarsest);
+        sizes
+    }
+}
+
+/// Groups nodes into aggregates (Vaněk et al.'s three passes): a node whose neighbours
+/// are all ungrouped starts an aggregate of its whole neighbourhood; the rest join the
+/// aggregate of a grouped neighbour; what remains groups with its ungrouped neighbours.
+/// Returns each node's aggregate and the number of aggregates.
+fn aggregate(pattern: &BlockPattern) -> (Vec<u32>, usize) {
+    const FREE: u32 = u32::MAX;
+    let n = pattern.rows();
+    let mut aggregate = vec![FREE; n];
+    let mut count = 0u32;
+    for i in 0..n {
+        if pattern.row(i).iter().all(|&j| aggregate[j as usize] == FREE) {
+            for &j in pattern.row(i) {
+                aggregate[j as usize] = count;
+            }
+            count += 1;
+        }
+    }
+    let roots = aggregate.clone();
+    for i in 0..n {
+        if aggregate[i] == FREE
+            && let Some(&j) = pattern.row(i).iter().find(|&&j| roots[j as usize] != FREE)
+        {
+            aggregate[i] = roots[j as usize];
+        }
+    }
+    for i in 0..n {
+        if aggregate[i] == FREE {
+            for &j in pattern.row(i) {
+                if aggregate[j as usize] == FREE {
+                    aggregate[j as usize] = count;
+                }
+            }
+            count += 1;
+        }
+    }
+    (aggregate, count as usize)
+}
+
+/// A pattern of `rows` rows, row `i` the sorted distinct columns that `fill(i, row)`
+/// pushes.
+fn rows_of(rows: usize, mut fill: impl FnMut(usize, &mut Vec<u32>)) -> BlockPattern {
+    let mut pattern = BlockPattern { offsets: vec![0], columns: Vec::new() };
+    let mut row = Vec::new();
+    for i in 0..rows {
+        row.clear();
+        fill(i, &mut row);
+        row.sort_unstable();
+        row.dedup();
+        pattern.columns.extend_from_slice(&row);
+        pattern.offsets.push(pattern.columns.len() as u32);
+    }
+    pattern
+}
+
+/// The slots of `pattern` grouped by column: row `c` of the result lists the slots in
+/// column `c`, in row order.
+fn transpose(pattern: &BlockPattern, columns: usize) -> BlockPattern {
+    let mut offsets = vec![0u32; columns + 1];
+    for &c in &pattern.columns {
+        offsets[c as usize + 1] += 1;
+    }
+    for c in 0..columns {
+        offsets[c + 1] += offsets[c];
+    }
+    let mut next = offsets.clone();
+    let mut slots = vec![0u32; pattern.columns.len()];
+    for (slot, &c) in pattern.columns.iter().enumerate() {
+        slots[next[c as usize] as usize] = slot as u32;
+        next[c as usize] += 1;
+    }
+    BlockPattern { offsets, columns: slots }
+}
+
+/// One level's numbers for the current system: its smoother and its prolongator from the
+/// next coarser level.
+#[derive(Debug, Clone, Default)]
+struct Level {
+    /// Per node, the inverse of its filtered diagonal block times the filter,
+    /// `(S A_ii S + I − S)⁻¹ S`: a Jacobi step that stays within the filter.
+    inverse_diagonal: Vec<Mat3>,
+    /// Weight of the Jacobi steps, `4 / (3 ρ)` for ρ a bound on the spectral radius of
+    /// `D⁻¹ A`.
+    weight: f32,
+    /// The filtered, smoothed prolongator `S P` from the next coarser level.
+    prolongation: BlockMatrix,
+    /// `A S P`.
+    product: BlockMatrix,
+    /// Estimate of the dominant mode of `D⁻¹ A`, kept for the next system.
+    dominant: Vec<Vec3>,
+    /// The residual after smoothing, then the prolongated coarse correction.
+    scratch: Vec<Vec3>,
+    /// The coarser level's residual and correction in the V-cycle.
+    coarse_residual: Vec<Vec3>,
+    coarse_correction: Vec<Vec3>,
+}
+
+/// The numbers of a [`Hierarchy`] for one system, rebuilt by [`Multigrid::setup`] and
+/// applied by [`Multigrid::apply`]; its buffers are kept from system to system.
+#[derive(Debug, Clone, Default)]
+pub struct Multigrid {
+    /// Per level that has a coarser one, finest first.
+    levels: Vec<Level>,
+    /// Matrices of the levels below the finest (whose matrix is the system).
+    matrices: Vec<BlockMatrix>,
+    /// The coarsest level's direct solver.
+    coarsest: CoarsestSolver,
+}
+
+/// The coarsest level's solver: dense Cholesky, or, where the coarsening stalled above
+/// [`DENSE_LIMIT`] nodes (a cloth of many loose pieces), block Jacobi.
+#[derive(Debug, Clone, Default)]
+struct CoarsestSolver {
+    /// Lower Cholesky factor, 3n × 3n, row-major; a zero pivot marks an unknown the coarse
+    /// space does not reach, whose solution is zero.
+    factor: Vec<f64>,
+    /// Right-hand side, then solution.
+    unknowns: Vec<f64>,
+    /// The inverse diagonal blocks, when the level is too large to factor.
+    jacobi: Vec<Mat3>,
+}
+
+/// The matrix of one level as the kernels see it: its pattern, its blocks and, on the
+/// finest level, the constraint filters.
+#[derive(Clone, Copy)]
+struct Operator<'a> {
+    pattern: &'a BlockPattern,
+    matrix: &'a BlockMatrix,
+    filter: Option<&'a [Mat3]>,
+}
+
+impl Operator<'_> {
+    fn filter(&self, i: usize) -> Mat3 {
+        self.filter.map_or(Mat3::IDENTITY, |f| f[i])
+    }
+
+    /// `(S A_ii S + I − S)⁻¹ S` for node `i`, zero where that is singular.
+    fn inverse_diagonal(&self, i: usize) -> Mat3 {
+        let s = self.filter(i);
+        let diagonal = s * self.matrix.block(self.pattern, i as u32, i as u32) * s + (Mat3::IDENTITY - s);
+        if diagonal.determinant().abs() > 0.0 { diagonal.inverse() * s } else { Mat3::ZERO }
+    }
+
+    /// `out = r − A z`.
+    fn residual(&self, r: &[Vec3], z: &[Vec3], out: &mut [Vec3]) {
+        let (pattern, matrix) = (self.pattern, self.matrix);
+        out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, out)| {
+            let mut sum = r[i];
+            for k in pattern.offsets[i] as usize..pattern.offsets[i + 1] as usize {
+                sum -= matrix.blocks[k] * z[pattern.columns[k] as usize];
+            }
+            *out = sum;
+        });
+    }
+}
+
+/// Euclidean length of a vector of blocks, summed in order.
+fn length(v: &[Vec3]) -> f64 {
+    v.iter().map(|x| f64::from(x.length_squared())).sum::<f64>().sqrt()
+}
+
+impl Level {
+    /// The Jacobi smoother: inverse diagonal blocks, and a weight from the spectral radius
+    /// of `D⁻¹ A`, estimated by power iterations that start from the last system's
+    /// dominant mode (the system changes little from step to step) and enlarged by
+    /// [`RADIUS_MARGIN`], since power iterations approach it from below. Gershgorin's bound
+    /// is no use here: on a deformed sheet it overestimated the radius twentyfold (59
+    /// against about 3), and the smoothing all but stopped.
+    fn smoother(&mut self, a: Operator) {
+        let n = a.pattern.rows();
+        (0..n)
+            .into_par_iter()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .map(|i| a.inverse_diagonal(i))
+            .collect_into_vec(&mut self.inverse_diagonal);
+        if self.dominant.len() != n {
+            // A start with every direction in it: a fixed, irregular pattern.
+            self.dominant.clear();
+            self.dominant.extend((0..n).map(|i| {
+                let h = (i as u32).wrapping_mul(2_654_435_761);
+                Vec3::new((h >> 8 & 0xff) as f32, (h >> 16 & 0xff) as f32, (h >> 24) as f32) / 255.0 - 0.5
+            }));
+        }
+        self.scratch.resize(n, Vec3::ZERO);
+        let mut radius = 0.0;
+        for _ in 0..POWER_ITERATIONS {
+            let norm = length(&self.dominant);
+            if norm == 0.0 {
+                break;
+            }
+            let inverse = &self.inverse_diagonal;
+            a.matrix.multiply(a.pattern, &self.dominant, &mut self.scratch);
+            self.dominant
+                .par_iter_mut()
+                .zip(self.scratch.par_iter())
+                .with_min_len(PARALLEL_MIN_LEN)
+                .enumerate()
+                .for_each(|(i, (x, ax))| *x = (inverse[i] * *ax) / norm as f32);
+            radius = length(&self.dominant);
+        }
+        self.weight = if radius > 0.0 { 4.0 / (3.0 * RADIUS_MARGIN * radius as f32) } else { 0.0 };
+    }
+
+    /// The filtered smoothed prolongator `S (I − ω D⁻¹ A) P₀`, `P₀` the aggregates'
+    /// translations: block `(i, J)` is `δ_iJ S_i − ω D_i⁻¹ S_i Σ_{k ∈ J} A_ik S_k`.
+    fn prolongator(&mut self, a: Operator, coarsening: &Coarsening) {
+        let p = &coarsening.prolongation;
+        let (inverse, weight, aggregate) = (&self.inverse_diagonal, self.weight, &coarsening.aggregate);
+        (0..p.columns.len())
+            .into_par_iter()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .map(|slot| {
+                let (i, coarse) = (p.row_of(slot), p.columns[slot]);
+                let mut sum = Mat3::ZERO;
+                for k in a.pattern.offsets[i] as usize..a.pattern.offsets[i + 1] as usize {
+                    let column = a.pattern.columns[k] as usize;
+                    if aggregate[column] == coarse {
+                        sum += a.matrix.blocks[k] * a.filter(column);
+                    }
+                }
+                let own = if aggregate[i] == coarse { a.filter(i) } else { Mat3::ZERO };
+                own - weight * (inverse[i] * sum)
+            })
+            .collect_into_vec(&mut self.prolongation.blocks);
+    }
+
+    /// `A S P` over the product pattern.
+    fn product(&mut self, a: Operator, coarsening: &Coarsening) {
+        let (p, ap, prolongation) = (&coarsening.prolongation, &coarsening.product, &self.prolongation);
+        (0..ap.columns.len())
+            .into_par_iter()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .map(|slot| {
+                let (i, coarse) = (ap.row_of(slot), ap.columns[slot]);
+                let (start, end) = (a.pattern.offsets[i] as usize, a.pattern.offsets[i + 1] as usize);
+                let mut sum = Mat3::ZERO;
+                for k in start..end {
+                    if let Some(s) = p.slot(a.pattern.columns[k], coarse) {
+                        sum += a.matrix.blocks[k] * prolongation.blocks[s as usize];
+                    }
+                }
+                sum
+            })
+            .collect_into_vec(&mut self.product.blocks);
+    }
+
+    /// The coarser level's matrix `(S P)ᵀ A S P`.
+    fn galerkin(&self, coarsening: &Coarsening, out: &mut BlockMatrix) {
+        let Coarsening { prolongation: p, restriction, product: ap, coarse, .. } = coarsening;
+        (0..coarse.columns.len())
+            .into_par_iter()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .map(|slot| {
+                let (row, column) = (coarse.row_of(slot), coarse.columns[slot]);
+                let mut sum = Mat3::ZERO;
+                for &s in restriction.row(row) {
+                    if let Some(t) = ap.slot(p.row_of(s as usize) as u32, column) {
+                        sum += self.prolongation.blocks[s as usize].transpose() * self.product.blocks[t as usize];
+                    }
+                }
+                sum
+            })
+            .collect_into_vec(&mut out.blocks);
+    }
+
+    /// `z = ω D⁻¹ r`, then `sweeps − 1` more Jacobi steps `z += ω D⁻¹ (r − A z)`.
+    fn smooth(&mut self, a: Operator, r: &[Vec3], z: &mut [Vec3], first: bool) {
+        let (inverse, weight) = (&self.inverse_diagonal, self.weight);
+        for sweep in 0..SMOOTHING_SWEEPS {
+            if first && sweep == 0 {
+                z.par_iter_mut()
+                    .with_min_len(PARALLEL_MIN_LEN)
+                    .enumerate()
+                    .for_each(|(i, z)| *z = weight * (inverse[i] * r[i]));
+                continue;
+            }
+            a.residual(r, z, &mut self.scratch);
+            let scratch = &self.scratch;
+            z.par_iter_mut()
+                .with_min_len(PARALLEL_MIN_LEN)
+                .enumerate()
+                .for_each(|(i, z)| *z += weight * (inverse[i] * scratch[i]));
+        }
+    }
+}
+
+impl Multigrid {
+    /// Builds the levels' smoothers, prolongators and matrices, and the coarsest factor,
+    /// for `system` (over `pattern`, the finest level of `hierarchy`) with its unknowns
+    /// restricted by the per-particle `filter`.
+    pub fn setup(&mut self, hierarchy: &Hierarchy, pattern: &BlockPattern, system: &BlockMatrix, filter: &[Mat3]) {
+        let depth = hierarchy.coarsenings.len();
+        self.levels.resize_with(depth, Level::default);
+        self.matrices.resize_with(depth, BlockMatrix::default);
+        let finest = Operator { pattern, matrix: system, filter: Some(filter) };
+        for (l, coarsening) in hierarchy.coarsenings.iter().enumerate() {
+            let (above, below) = self.matrices.split_at_mut(l);
+            let a = match l {
+                0 => finest,
+                _ => Operator { pattern: &hierarchy.coarsenings[l - 1].coarse, matrix: &above[l - 1], filter: None },
+            };
+            let level = &mut self.levels[l];
+            level.smoother(a);
+            level.prolongator(a, coarsening);
+            level.product(a, coarsening);
+            level.galerkin(coarsening, &mut below[0]);
+            level.scratch.resize(coarsening.aggregate.len(), Vec3::ZERO);
+            let coarse = coarsening.coarse.rows();
+            level.coarse_residual.resize(coarse, Vec3::ZERO);
+            level.coarse_correction.resize(coarse, Vec3::ZERO);
+        }
+        let coarsest = match depth {
+            0 => finest,
+            _ => Operator {
+                pattern: &hierarchy.coarsenings[depth - 1].coarse,
+                matrix: &self.matrices[depth - 1],
+                filter: None,
+            },
+        };
+        self.coarsest.factorize(coarsest);
+    }
+
+    /// One symmetric V-cycle on the finest level's residual `r` (filtered), giving the
+    /// correction `z` (within the filter).
+    pub fn apply(
+        &mut self,
+        hierarchy: &Hierarchy,
+        pattern: &BlockPattern,
+        system: &BlockMatrix,
+        filter: &[Mat3],
+        r: &[Vec3],
+        z: &mut [Vec3],
+    ) {
+        let finest = Operator { pattern, matrix: system, filter: Some(filter) };
+        cycle(&mut self.levels, &hierarchy.coarsenings, &self.matrices, &mut self.coarsest, finest, r, z);
+    }
+}
+
+/// The V-cycle from the level of `a` down: smooth, restrict the residual, correct from
+/// the coarser level, prolongate, smooth again.
+fn cycle(
+    levels: &mut [Level],
+    coarsenings: &[Coarsening],
+    matrices: &[BlockMatrix],
+    coarsest: &mut CoarsestSolver,
+    a: Operator,
+    r: &[Vec3],
+    z: &mut [Vec3],
+) {
+    let Some((level, deeper)) = levels.split_first_mut() else {
+        coarsest.solve(r, z);
+        return;
+    };
+    let coarsening = &coarsenings[0];
+    level.smooth(a, r, z, true);
+    a.residual(r, z, &mut level.scratch);
+    // r_c = (S P)ᵀ t.
+    let (restriction, rows, t, blocks) =
+        (&coarsening.restriction, &coarsening.restriction_rows, &level.scratch, &level.prolongation.blocks);
+    level.coarse_residual.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(c, out)| {
+        let range = restriction.offsets[c] as usize..restriction.offsets[c + 1] as usize;
+        *out = range
+            .fold(Vec3::ZERO, |sum, k| sum + blocks[restriction.columns[k] as usize].transpose() * t[rows[k] as usize]);
+    });
+    let below = Operator { pattern: &coarsening.coarse, matrix: &matrices[0], filter: None };
+    cycle(
+        deeper,
+        &coarsenings[1..],
+        &matrices[1..],
+        coarsest,
+        below,
+        &level.coarse_residual,
+        &mut level.coarse_correction,
+    );
+    level.prolongation.multiply(&coarsening.prolongation, &level.coarse_correction, &mut level.scratch);
+    z.par_iter_mut().zip(level.scratch.par_iter()).with_min_len(PARALLEL_MIN_LEN).for_each(|(z, c)| *z += *c);
+    level.smooth(a, r, z, false);
+}
+
+impl CoarsestSolver {
+    /// Factors the (filtered) matrix of `a`. A pivot that falls to round-off of its
+    /// diagonal marks an unknown outside the coarse space (a pinned aggregate): its column
+    /// is dropped, and its solution is zero.
+    fn factorize(&mut self, a: Operator) {
+        if a.pattern.rows() > DENSE_LIMIT {
+            self.factor.clear();
+            (0..a.pattern.rows())
+                .into_par_iter()
+                .with_min_len(PARALLEL_MIN_LEN)
+                .map(|i| a.inverse_diagonal(i))
+                .collect_into_vec(&mut self.jacobi);
+            return;
+        }
+        self.jacobi.clear();
+        let m = 3 * a.pattern.rows();
+        self.factor.clear();
+        self.factor.resize(m * m, 0.0);
+        self.unknowns.resize(m, 0.0);
+        for i in 0..a.pattern.rows() {
+            let si = a.filter(i);
+            for k in a.pattern.offsets[i] as usize..a.pattern.offsets[i + 1] as usize {
+                let j = a.pattern.columns[k] as usize;
+                let mut block = si * a.matrix.blocks[k] * a.filter(j);
+                if i == j {
+                    block += Mat3::IDENTITY - si;
+                }
+                for (c, column) in [block.x_axis, block.y_axis, block.z_axis].iter().enumerate() {
+                    for (r, value) in column.to_array().iter().enumerate() {
+                        self.factor[(3 * i + r) * m + 3 * j + c] = f64::from(*value);
+                    }
+                }
+            }
+        }
+        let f = &mut self.factor;
+        for j in 0..m {
+            let original = f[j * m + j];
+            let pivot = original - (0..j).map(|k| f[j * m + k] * f[j * m + k]).sum::<f64>();
+            if pivot <= 1e-9 * original.abs() || pivot <= 0.0 {
+                for i in j..m {
+                    f[i * m + j] = 0.0;
+                }
+                continue;
+            }
+            let root = pivot.sqrt();
+            f[j * m + j] = root;
+            for i in j + 1..m {
+                let sum = (0..j).map(|k| f[i * m + k] * f[j * m + k]).sum::<f64>();
+                f[i * m + j] = (f[i * m + j] - sum) / root;
+            }
+        }
+    }
+
+    /// `z = L⁻ᵀ L⁻¹ r`, zero in the dropped unknowns.
+    fn solve(&mut self, r: &[Vec3], z: &mut [Vec3]) {
+        if !self.jacobi.is_empty() {
+            z.par_iter_mut()
+                .zip(r)
+                .zip(&self.jacobi)
+                .with_min_len(PARALLEL_MIN_LEN)
+                .for_each(|((z, r), d)| *z = *d * *r);
+            return;
+        }
+        let (f, y) = (&self.factor, &mut self.unknowns);
+        let m = y.len();
+        for (i, v) in r.iter().enumerate() {
+            y[3 * i..3 * i + 3].copy_from_slice(&v.to_array().map(f64::from));
+        }
+        for j in 0..m {
+            let d = f[j * m + j];
+            y[j] = if d > 0.0 { (y[j] - (0..j).map(|k| f[j * m + k] * y[k]).sum::<f64>()) / d } else { 0.0 };
+        }
+        for j in (0..m).rev() {
+            let d = f[j * m + j];
+            y[j] = if d > 0.0 { (y[j] - (j + 1..m).map(|k| f[k * m + j] * y[k]).sum::<f64>()) / d } else { 0.0 };
+        }
+        for (i, v) in z.iter_mut().enumerate() {
+            *v = Vec3::new(y[3 * i] as f32, y[3 * i + 1] as f32, y[3 * i + 2] as f32);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solver::elements::spring::outer;
+
+    /// An `n × n` grid of unit spacing, each quad split along one diagonal, as the system
+    /// `m I + Σ k d dᵀ` of an implicit step with springs of stiffness `k` along its edges
+    /// (`d` the unit edge): stiff along the edges, soft across the sheet, like cloth.
+    fn sheet(n: u32, m: f32, k: f32) -> (BlockPattern, BlockMatrix) {
+        let index = |i: u32, j: u32| i * n + j;
+        let mut edges = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                if j + 1 < n {
+                    edges.push([index(i, j), index(i, j + 1)]);
+                }
+                if i + 1 < n {
+                    edges.push([index(i, j), index(i + 1, j)]);
+                }
+                if i + 1 < n && j + 1 < n {
+                    edges.push([index(i, j), index(i + 1, j + 1)]);
+                }
+            }
+        }
+        let pattern = BlockPattern::from_stencils((n * n) as usize, edges.iter().map(|e| &e[..]));
+        let mut system = BlockMatrix::default();
+        system.reset(&pattern);
+        system.add_diagonal(&pattern, |_| m);
+        let position = |p: u32| Vec3::new((p % n) as f32, (p / n) as f32, 0.0);
+        for e in &edges {
+            let d = (position(e[1]) - position(e[0])).normalize();
+            let block = k * outer(d, d);
+            system.add_local(&pattern.stencil_slots(*e), &[[block, -block], [-block, block]]);
+        }
+        (pattern, system)
+    }
+
+    /// A fixed, irregular vector within `filter`.
+    fn probe(filter: &[Mat3], seed: u32) -> Vec<Vec3> {
+        (0..filter.len())
+            .map(|i| {
+                let h = (i as u32 ^ seed).wrapping_mul(2_654_435_761);
+                filter[i] * (Vec3::new((h >> 8 & 0xff) as f32, (h >> 16 & 0xff) as f32, (h >> 24) as f32) / 255.0 - 0.5)
+            })
+            .collect()
+    }
+
+    fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
+        a.iter().zip(b).map(|(a, b)| f64::from(a.dot(*b))).sum()
+    }
+
+    #[test]
+    fn a_sheet_coarsens_level_by_level_to_a_few_dozen_nodes() {
+        let (pattern, _) = sheet(64, 1.0, 1.0);
+        let sizes = Hierarchy::build(&pattern).sizes();
+        assert!(sizes.len() >= 3, "levels {sizes:?}");
+        assert!(sizes.windows(2).all(|w| 4 * w[1] <= w[0]), "each level at least 4× coarser: {sizes:?}");
+        assert!(sizes.last().is_some_and(|&n| n <= COARSEST_NODES), "coarsest {sizes:?}");
+    }
+
+    #[test]
+    fn the_v_cycle_is_symmetric_positive_within_the_filter_and_converges_alone() {
+        // h²k/m = 10⁴, as cloth at frame-sized steps; two levels below the particles.
+        let (pattern, system) = sheet(48, 1.0, 1.0e4);
+        let hierarchy = Hierarchy::build(&pattern);
+        assert!(hierarchy.sizes().len() >= 3, "levels {:?}", hierarchy.sizes());
+        let n = pattern.rows();
+        let mut filter = vec![Mat3::IDENTITY; n];
+        filter[0] = Mat3::ZERO;
+        filter[47] = Mat3::ZERO;
+        filter[1000] = Mat3::IDENTITY - outer(Vec3::Y, Vec3::Y);
+        let mut multigrid = Multigrid::default();
+        multigrid.setup(&hierarchy, &pattern, &system, &filter);
+        let apply = |multigrid: &mut Multigrid, r: &[Vec3]| {
+            let mut z = vec![Vec3::ZERO; n];
+            multigrid.apply(&hierarchy, &pattern, &system, &filter, r, &mut z);
+            z
+        };
+        let (r1, r2) = (probe(&filter, 1), probe(&filter, 2));
+        let (z1, z2) = (apply(&mut multigrid, &r1), apply(&mut multigrid, &r2));
+        let (a, b) = (dot(&z1, &r2), dot(&r1, &z2));
+        let scale = (dot(&z1, &r1) * dot(&z2, &r2)).sqrt();
+        assert!(dot(&z1, &r1) > 0.0 && dot(&z2, &r2) > 0.0, "not positive");
+        assert!((a - b).abs() < 1e-4 * scale, "not symmetric: {a} against {b}");
+        assert_eq!(z1[0], Vec3::ZERO, "a pinned particle moved");
+        assert!(z1[1000].y.abs() < 1e-6 * z1[1000].length(), "crossed the normal: {}", z1[1000]);
+
+        // As a stationary iteration x += V (b − S A x) the cycle alone converges: its error
+        // propagation has norm below one. Measured: 10 cycles take the residual down by
+        // 0.0085 (0.62 a cycle).
+        let b = probe(&filter, 3);
+        let mut x = vec![Vec3::ZERO; n];
+        let mut residual = b.clone();
+        let mut product = vec![Vec3::ZERO; n];
+        let start = dot(&b, &b).sqrt();
+        for _ in 0..10 {
+            let z = apply(&mut multigrid, &residual);
+            x.iter_mut().zip(&z).for_each(|(x, z)| *x += *z);
+            system.multiply(&pattern, &x, &mut product);
+            for i in 0..n {
+                residual[i] = filter[i] * (b[i] - product[i]);
+            }
+        }
+        let end = dot(&residual, &residual).sqrt();
+        assert!(end < 2e-2 * start, "10 cycles took the residual from {start} to {end}");
+    }
+}
