@@ -24,6 +24,7 @@ use rayon::prelude::*;
 
 use super::PARALLEL_MIN_LEN;
 use super::elements::{BlockMatrix, BlockPattern};
+use crate::components::Csr;
 
 /// Levels stop coarsening at this many nodes; the coarsest system is then factored
 /// densely (3 × 48 unknowns: a few hundred thousand flops).
@@ -64,7 +65,7 @@ struct Coarsening {
     /// row `i` holds the aggregates of `i`'s neighbours.
     prolongation: BlockPattern,
     /// `P` by columns: for coarse node `c`, the slots of `P` in column `c`, in row order.
-    restriction: BlockPattern,
+    restriction: Csr,
     /// The row of each slot of `restriction`.
     restriction_rows: Vec<u32>,
     /// Blocks of `A P`.
@@ -92,12 +93,14 @@ impl Hierarchy {
                     row.extend_from_slice(prolongation.row(k as usize));
                 }
             });
-            let restriction = transpose(&prolongation, count);
-            let restriction_rows =
-                restriction.columns.iter().map(|&s| prolongation.row_of(s as usize) as u32).collect();
+            let slot_columns: Vec<[u32; 1]> = prolongation.columns.iter().map(|&c| [c]).collect();
+            let restriction = Csr::from_items(count, &slot_columns);
+            let restriction_rows: Vec<u32> =
+                restriction.items.iter().map(|&s| prolongation.row_of(s as usize) as u32).collect();
             let coarse = rows_of(count, |c, row| {
-                for &slot in restriction.row(c) {
-                    row.extend_from_slice(product.row(prolongation.row_of(slot as usize)));
+                let range = restriction.offsets[c] as usize..restriction.offsets[c + 1] as usize;
+                for &fine in &restriction_rows[range] {
+                    row.extend_from_slice(product.row(fine as usize));
                 }
             });
             current = coarse.clone();
@@ -107,7 +110,8 @@ impl Hierarchy {
     }
 
     /// Nodes per level, finest first.
-    pub fn sizes(&self) -> Vec<usize> {
+    #[cfg(test)]
+    fn sizes(&self) -> Vec<usize> {
         let mut sizes: Vec<usize> = self.coarsenings.iter().map(|c| c.aggregate.len()).collect();
         sizes.push(self.coarsest);
         sizes
@@ -168,25 +172,6 @@ fn rows_of(rows: usize, mut fill: impl FnMut(usize, &mut Vec<u32>)) -> BlockPatt
     pattern
 }
 
-/// The slots of `pattern` grouped by column: row `c` of the result lists the slots in
-/// column `c`, in row order.
-fn transpose(pattern: &BlockPattern, columns: usize) -> BlockPattern {
-    let mut offsets = vec![0u32; columns + 1];
-    for &c in &pattern.columns {
-        offsets[c as usize + 1] += 1;
-    }
-    for c in 0..columns {
-        offsets[c + 1] += offsets[c];
-    }
-    let mut next = offsets.clone();
-    let mut slots = vec![0u32; pattern.columns.len()];
-    for (slot, &c) in pattern.columns.iter().enumerate() {
-        slots[next[c as usize] as usize] = slot as u32;
-        next[c as usize] += 1;
-    }
-    BlockPattern { offsets, columns: slots }
-}
-
 /// One level's numbers for the current system: its smoother and its prolongator from the
 /// next coarser level.
 #[derive(Debug, Clone, Default)]
@@ -194,8 +179,8 @@ struct Level {
     /// Per node, the inverse of its filtered diagonal block times the filter,
     /// `(S A_ii S + I − S)⁻¹ S`: a Jacobi step that stays within the filter.
     inverse_diagonal: Vec<Mat3>,
-    /// Weight of the Jacobi steps, `4 / (3 ρ)` for ρ a bound on the spectral radius of
-    /// `D⁻¹ A`.
+    /// Weight of the Jacobi steps, `4 / (3 ρ)` for ρ the estimated spectral radius of
+    /// `D⁻¹ A` (with [`RADIUS_MARGIN`]).
     weight: f32,
     /// The filtered, smoothed prolongator `S P` from the next coarser level.
     prolongation: BlockMatrix,
@@ -361,16 +346,17 @@ impl Level {
 
     /// The coarser level's matrix `(S P)ᵀ A S P`.
     fn galerkin(&self, coarsening: &Coarsening, out: &mut BlockMatrix) {
-        let Coarsening { prolongation: p, restriction, product: ap, coarse, .. } = coarsening;
+        let Coarsening { restriction, restriction_rows, product: ap, coarse, .. } = coarsening;
         (0..coarse.columns.len())
             .into_par_iter()
             .with_min_len(PARALLEL_MIN_LEN)
             .map(|slot| {
                 let (row, column) = (coarse.row_of(slot), coarse.columns[slot]);
                 let mut sum = Mat3::ZERO;
-                for &s in restriction.row(row) {
-                    if let Some(t) = ap.slot(p.row_of(s as usize) as u32, column) {
-                        sum += self.prolongation.blocks[s as usize].transpose() * self.product.blocks[t as usize];
+                for k in restriction.offsets[row] as usize..restriction.offsets[row + 1] as usize {
+                    if let Some(t) = ap.slot(restriction_rows[k], column) {
+                        let s = restriction.items[k] as usize;
+                        sum += self.prolongation.blocks[s].transpose() * self.product.blocks[t as usize];
                     }
                 }
                 sum
@@ -378,7 +364,8 @@ impl Level {
             .collect_into_vec(&mut out.blocks);
     }
 
-    /// `z = ω D⁻¹ r`, then `sweeps − 1` more Jacobi steps `z += ω D⁻¹ (r − A z)`.
+    /// [`SMOOTHING_SWEEPS`] Jacobi steps `z += ω D⁻¹ (r − A z)`; with `first`, from
+    /// `z = 0` (whose first step is `z = ω D⁻¹ r`, without the product).
     fn smooth(&mut self, a: Operator, r: &[Vec3], z: &mut [Vec3], first: bool) {
         let (inverse, weight) = (&self.inverse_diagonal, self.weight);
         for sweep in 0..SMOOTHING_SWEEPS {
@@ -419,7 +406,6 @@ impl Multigrid {
             level.prolongator(a, coarsening);
             level.product(a, coarsening);
             level.galerkin(coarsening, &mut below[0]);
-            level.scratch.resize(coarsening.aggregate.len(), Vec3::ZERO);
             let coarse = coarsening.coarse.rows();
             level.coarse_residual.resize(coarse, Vec3::ZERO);
             level.coarse_correction.resize(coarse, Vec3::ZERO);
@@ -475,7 +461,7 @@ fn cycle(
     level.coarse_residual.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(c, out)| {
         let range = restriction.offsets[c] as usize..restriction.offsets[c + 1] as usize;
         *out = range
-            .fold(Vec3::ZERO, |sum, k| sum + blocks[restriction.columns[k] as usize].transpose() * t[rows[k] as usize]);
+            .fold(Vec3::ZERO, |sum, k| sum + blocks[restriction.items[k] as usize].transpose() * t[rows[k] as usize]);
     });
     let below = Operator { pattern: &coarsening.coarse, matrix: &matrices[0], filter: None };
     cycle(
