@@ -50,12 +50,13 @@ pub fn collide_with_bodies(
     }
     for (cloth, material, mut particles, topology, workspace, mut stats, mut touching) in &mut cloths {
         bodies.clear();
-        bodies.extend(colliders.iter().map(|(c, _)| ContactBody {
+        bodies.extend(colliders.iter().map(|(c, prop)| ContactBody {
             shape: c.shape.clone(),
             state: c.motion.state_at(t),
             friction: c.friction,
             thickness: c.thickness + cloth.thickness,
             response: c.response,
+            prop: prop.is_some(),
         }));
         let Particles { position, velocity, inv_mass, .. } = &mut *particles;
         let density = material.density;

@@ -27,13 +27,15 @@ pub fn integrate_cloths(
     for (cloth, mut particles, elements, touching, mut workspace) in &mut cloths {
         let SolverWorkspace { integrator, forces, support, constraints, .. } = &mut *workspace;
         // Particles the last step left on a body stay on it while the forces press them
-        // into it; those pulled away are let go.
+        // into it (closing what gap the last step left), held fast where static friction
+        // held them; those pulled away are let go.
         constraints.clear();
         constraints.extend(touching.0.iter().filter(|t| particles.force[t.particle as usize].dot(t.normal) < 0.0).map(
             |t| VelocityConstraint {
                 particle: t.particle,
                 normal: t.normal,
-                normal_velocity: t.surface_velocity.dot(t.normal),
+                velocity: t.surface_velocity - t.gap / settings.dt * t.normal,
+                stick: t.sticking,
             },
         ));
         integrator.resize(particles.len());

@@ -33,11 +33,13 @@ fn table_corner_drapes_rest_on_the_top_and_hang_over_both_edges() {
         // bends over both edges at once).
         let resting = over.iter().filter(|p| p.y < TABLE_TOP + 0.003).count();
         assert!(resting * 4 >= over.len() * 3, "{name}: {resting} of {} rest on the top", over.len());
-        // Over each edge some of it hangs well below the top.
+        // Over each edge the 0.1 m overhang hangs down by more than half its length.
+        // (Friction keeps the cloth where it landed, so the overhang is what the scene
+        // placed; the stiff mat, bending length 5.4 cm, droops 8.7 cm of its 10.)
         let lowest =
             |beyond: &dyn Fn(&Vec3) -> bool| x.iter().filter(|p| beyond(p)).map(|p| p.y).fold(f32::INFINITY, f32::min);
-        assert!(lowest(&|p| p.x > 0.02) < TABLE_TOP - 0.1, "{name}: nothing hangs over the x edge");
-        assert!(lowest(&|p| p.z > 0.02) < TABLE_TOP - 0.1, "{name}: nothing hangs over the z edge");
+        assert!(lowest(&|p| p.x > 0.02) < TABLE_TOP - 0.05, "{name}: nothing hangs over the x edge");
+        assert!(lowest(&|p| p.z > 0.02) < TABLE_TOP - 0.05, "{name}: nothing hangs over the z edge");
     }
 }
 

@@ -1,19 +1,34 @@
 //! Zheng's slope test (§3.7.1): a cloth falling onto a 30° slope presses on it with
 //! ρ g cos 30° = 1.2217 Pa; with μ = 0.2 it slides with acceleration g (sin 30° − μ cos 30°)
 //! under a friction stress μ ρ g cos 30° = 0.2443 Pa; with μ = tan 30° + 0.01 it sticks, the
-//! friction carrying ρ g sin 30° = 0.7053 Pa.
+//! friction carrying ρ g sin 30° = 0.7053 Pa. Both as Zheng ran them (explicit, small
+//! steps, impulses) and at one implicit step a frame, where the resting cloth is held by
+//! the solve's constraints and static friction holds it fast.
 
 mod common;
+
+use std::path::Path;
 
 use glam::Vec3;
 use selvedge::Simulation;
 use selvedge::components::Particles;
+use selvedge::solver::integrate::Integrator;
 
 const RHO: f64 = 0.14395;
 const G: f64 = 9.8;
 
-fn simulation(name: &str) -> Simulation {
-    common::bundled(name)
+/// The bundled scene, as it is (explicit, 20 steps a frame), or with one implicit Euler
+/// step a frame (1/60 s), where the slope holds the resting cloth by constraints in the
+/// solve and friction comes from their push.
+fn simulation(name: &str, implicit: bool) -> Simulation {
+    if !implicit {
+        return common::bundled(name);
+    }
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
+    let mut file = selvedge::scene::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    file.scene.solver.integrator = Integrator::ImplicitEuler;
+    file.scene.solver.substeps = Some(1);
+    Simulation::from_file(&file).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Mean position and velocity of the cloth.
@@ -49,7 +64,26 @@ fn run_until(sim: &mut Simulation, t: f64, friction_stress: f64) {
 
 #[test]
 fn with_mu_0_2_the_cloth_slides_at_the_coulomb_acceleration() {
-    let mut sim = simulation("zheng_slope.ron");
+    slides_at_the_coulomb_acceleration(false);
+}
+
+#[test]
+fn with_mu_0_2_the_cloth_slides_at_the_coulomb_acceleration_at_implicit_frame_steps() {
+    slides_at_the_coulomb_acceleration(true);
+}
+
+#[test]
+fn with_mu_above_tan_30_the_cloth_sticks() {
+    sticks(false);
+}
+
+#[test]
+fn with_mu_above_tan_30_the_cloth_sticks_at_implicit_frame_steps() {
+    sticks(true);
+}
+
+fn slides_at_the_coulomb_acceleration(implicit: bool) {
+    let mut sim = simulation("zheng_slope.ron", implicit);
     let cos30 = 30f64.to_radians().cos();
     let friction_stress = 0.2 * RHO * G * cos30;
     assert!((friction_stress - 0.2443).abs() < 1e-4);
@@ -63,9 +97,8 @@ fn with_mu_0_2_the_cloth_slides_at_the_coulomb_acceleration() {
     assert!((acceleration - expected).abs() < 0.02 * expected, "acceleration {acceleration} m/s², expected {expected}");
 }
 
-#[test]
-fn with_mu_above_tan_30_the_cloth_sticks() {
-    let mut sim = simulation("zheng_slope_stick.ron");
+fn sticks(implicit: bool) {
+    let mut sim = simulation("zheng_slope_stick.ron", implicit);
     let hold = RHO * G * 0.5;
     assert!((hold - 0.7053).abs() < 1e-4);
     run_until(&mut sim, 0.5, hold);

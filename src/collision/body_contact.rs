@@ -30,6 +30,13 @@ pub struct ContactBody {
     pub thickness: f32,
     /// What touching it does.
     pub response: ContactResponse,
+    /// Whether it is a prop, moved by the cloth's push through the staggered coupling of
+    /// [`super::coupling`]. Cloth touches a prop by the plain response only: no
+    /// [`TOUCH_SLACK`], no friction from the constraint's push, no static hold. The
+    /// coupling's balance takes the cloth's push along the contact normals as that
+    /// response gives it; a ball held by stuck cloth was thrown at 60 m/s, and with the
+    /// rest the ball on the hammock rolled to and fro.
+    pub prop: bool,
 }
 
 /// What the contacts of one step did to one cloth.
@@ -122,6 +129,14 @@ pub struct Touch {
     pub surface_velocity: Vec3,
     /// The body's index in the list given to [`resolve_body_contacts`].
     pub body: u32,
+    /// How far beyond the contact thickness the particle ended [m], which the next
+    /// implicit step closes: zero where the response put it back, up to [`TOUCH_SLACK`]
+    /// of the thickness where it was left (and zero for Durupınar's regimes, whose
+    /// penalty keeps the cloth off the surface).
+    pub gap: f32,
+    /// Whether static friction holds it: the next implicit step then keeps its whole
+    /// velocity at the body's, not only the normal part.
+    pub sticking: bool,
 }
 
 /// Where a particle is against a body.
@@ -141,6 +156,8 @@ struct Particle<'p> {
     area: f32,
     /// The impulse an implicit step's constraints gave it [N·s].
     support: Vec3,
+    /// The body that step held it fast on (static friction), if any.
+    held: Option<u32>,
 }
 
 /// Resolves the contacts of particles `x`, `v` (masses `1/inv_mass`, areas `area`) with
@@ -180,32 +197,47 @@ pub fn resolve_body_contacts(
                 return outcome;
             }
             let before = *v;
-            let mut particle = Particle { x, v, mass: 1.0 / inv_mass[i], area: area(i), support: support[i] };
             // The body whose surface the implicit constraint held the particle on.
-            if support[i] != Vec3::ZERO
-                && let Ok(k) = previous.binary_search_by_key(&(i as u32), |t| t.particle)
-            {
-                outcome.pushes[0] = Some((previous[k].body, support[i]));
+            let held_on = (support[i] != Vec3::ZERO)
+                .then(|| previous.binary_search_by_key(&(i as u32), |t| t.particle).ok().map(|k| previous[k]))
+                .flatten();
+            if let Some(touch) = held_on {
+                outcome.pushes[0] = Some((touch.body, support[i]));
             }
+            let held = held_on.filter(|t| t.sticking).map(|t| t.body);
+            let mut particle = Particle { x, v, mass: 1.0 / inv_mass[i], area: area(i), support: support[i], held };
             for (b, body) in bodies.iter().enumerate() {
                 let Some(near) = locate(body, h, start[i], particle.x) else {
                     continue;
                 };
+                let body_index = b as u32;
                 let before_body = *particle.v;
                 outcome.totals.max_penetration = outcome.totals.max_penetration.max(-near.signed);
                 outcome.totals.contact_area = particle.area;
+                let slides = matches!(body.response, ContactResponse::Slide);
+                let mut sticking = slides
+                    && !body.prop
+                    && particle.held == Some(body_index)
+                    && hold(body, near, &particle, &mut outcome.totals);
                 let touches = match body.response {
-                    ContactResponse::Slide => slide(body, near, &mut particle, h, &mut outcome.totals),
+                    ContactResponse::Slide => {
+                        sticking |= slide(body, near, &mut particle, h, &mut outcome.totals) && !body.prop;
+                        true
+                    }
                     ContactResponse::Stick => stick(body, near, &mut particle, h, &mut outcome.totals),
                     ContactResponse::Regimes(regimes) => {
                         respond_in_regimes(body, &regimes, near, &mut particle, h, &mut outcome.totals)
                     }
                 };
-                let body_index = b as u32;
                 if touches {
-                    let surface_velocity = body.state.velocity_at(*particle.x);
-                    outcome.touch =
-                        Some(Touch { particle: i as u32, normal: near.outward, surface_velocity, body: body_index });
+                    outcome.touch = Some(Touch {
+                        particle: i as u32,
+                        normal: near.outward,
+                        surface_velocity: body.state.velocity_at(*particle.x),
+                        body: body_index,
+                        gap: if slides { (near.signed - body.thickness).max(0.0) } else { 0.0 },
+                        sticking,
+                    });
                 }
                 let impulse = (*particle.v - before_body) * particle.mass;
                 match &mut outcome.pushes {
@@ -238,7 +270,17 @@ pub fn resolve_body_contacts(
     })
 }
 
-/// Where the particle at `x` is against the body, if within the body's reach: the point
+/// Fraction of the contact thickness beyond it within which a particle still touches a
+/// body, so that the next implicit step keeps it on the surface (closing the gap). A
+/// particle that step held on the surface ends at the thickness only to round-off (a
+/// quarter of a 0.26 mm thickness is one float step at 0.75 m), or a little off a body
+/// that accelerated during the step; without this slack it fell out of contact every
+/// other step, was let fall into the body, and was stopped there by friction: a table
+/// drape at 1/30 s rang at 100 % strain.
+const TOUCH_SLACK: f32 = 0.25;
+
+/// Where the particle at `x` is against the body, if within the body's reach (or within
+/// [`TOUCH_SLACK`] beyond it): the point
 /// its path from `start` entered the body if it crossed the surface this step (`x` is
 /// moved there and the distance is zero), else its nearest surface point. The path is
 /// taken relative to the body (its start carried along by the body's motion over the
@@ -263,7 +305,11 @@ fn locate(body: &ContactBody, h: f32, start: Vec3, x: &mut Vec3) -> Option<Proxi
     let offset = *x - projection.point;
     let distance = offset.length();
     let signed = if projection.is_inside { -distance } else { distance };
-    if signed >= body.thickness + body.response.reach() {
+    let slack = match (body.prop, body.response) {
+        (false, ContactResponse::Slide | ContactResponse::Stick) => TOUCH_SLACK * body.thickness,
+        _ => 0.0,
+    };
+    if signed >= body.thickness + slack + body.response.reach() {
         return None;
     }
     // A particle exactly on the surface has no direction to leave by.
@@ -280,10 +326,25 @@ fn put_back(body: &ContactBody, near: Proximity, p: &mut Particle<'_>) -> (Vec3,
     (surface, *p.v - surface)
 }
 
+/// Static friction for a particle the last implicit step held fast on the body (its whole
+/// velocity kept at the body's): it stays held while the tangential impulse that took
+/// lies within the Coulomb cone of the normal one, and is let go to slide from the next
+/// step otherwise. (Giving the impulse beyond the cone back to it at once is an explicit
+/// step of the stiff forces that pulled it, and diverged.) The friction impulse is what the
+/// hold took, even where that left the cone for this one step. Returns whether it stays
+/// held.
+fn hold(body: &ContactBody, near: Proximity, p: &Particle<'_>, totals: &mut ContactTotals) -> bool {
+    let normal = p.support.dot(near.outward);
+    let tangential = (p.support - normal * near.outward).length();
+    totals.friction_impulse += tangential;
+    tangential <= body.friction * normal.max(0.0)
+}
+
 /// Zheng's response: put back at the contact thickness, the approach velocity relative to
 /// the surface removed, and Coulomb friction bounded by μ times the velocity removed (to
 /// zero if that suffices: sticking). Friction also takes back the sliding the step made
-/// (`Δx = h Δv_t`), so a sticking particle does not creep by `h² g sin θ` a step.
+/// (`Δx = h Δv_t`), so a sticking particle does not creep by `h² g sin θ` a step. Returns
+/// whether friction stopped the particle on the body (it sticks).
 fn slide(body: &ContactBody, near: Proximity, p: &mut Particle<'_>, h: f32, totals: &mut ContactTotals) -> bool {
     let outward = near.outward;
     let (surface, relative) = put_back(body, near, p);
@@ -291,25 +352,26 @@ fn slide(body: &ContactBody, near: Proximity, p: &mut Particle<'_>, h: f32, tota
     // What an implicit solve's constraint pushed along the normal counts as contact force
     // (signed: its pulls cancel its pushes across the cloth).
     totals.normal_impulse += p.support.dot(outward);
-    // The normal velocity this response removes bounds friction. (Friction from the
-    // constraint's own impulse is left out: per particle it mixes the body's push with
-    // stiff internal forces and made resting cloth sticky.)
+    // The normal velocity this response removes, and the one the constraint's push gave
+    // a particle resting on the body, bound kinetic friction.
     let removed = (-approach).max(0.0);
-    if removed == 0.0 {
-        return true;
+    let pressed = match (body.prop, p.held) {
+        (false, None) => (p.support.dot(outward) / p.mass).max(0.0),
+        _ => 0.0,
+    };
+    if removed + pressed == 0.0 {
+        return false;
     }
     let tangential = relative - approach * outward;
     let speed = tangential.length();
-    let slip = if speed <= body.friction * removed {
-        Vec3::ZERO
-    } else {
-        tangential * (1.0 - body.friction * removed / speed)
-    };
-    *p.v = surface + slip;
+    let bound = body.friction * (removed + pressed);
+    let sticks = speed <= bound;
+    let slip = if sticks { Vec3::ZERO } else { tangential * (1.0 - bound / speed) };
+    *p.v = surface + approach.max(0.0) * outward + slip;
     *p.x += h * (slip - tangential);
     totals.normal_impulse += p.mass * removed;
     totals.friction_impulse += p.mass * (tangential - slip).length();
-    true
+    sticks && body.friction > 0.0
 }
 
 /// Bricis's restrain-on-contact (B5): put back at the contact thickness, the whole step's
@@ -412,6 +474,7 @@ mod tests {
             friction: 0.5,
             thickness: 0.0,
             response: ContactResponse::Slide,
+            prop: false,
         };
         let mut x = [Vec3::new(0.3, -0.01, 0.0), Vec3::new(0.0, 1.0, 0.0)];
         let mut v = [Vec3::new(2.0, -1.0, 0.0), Vec3::new(0.0, -1.0, 0.0)];
@@ -454,6 +517,7 @@ mod tests {
             friction: 2.0,
             thickness: 0.001,
             response: ContactResponse::Slide,
+            prop: false,
         };
         let mut x = [Vec3::new(0.0, 0.0005, 0.0)];
         let mut v = [Vec3::new(0.5, -0.2, 0.0)];
@@ -473,6 +537,7 @@ mod tests {
             friction: 0.0,
             thickness: 0.0005,
             response: ContactResponse::Slide,
+            prop: false,
         };
         let start = [Vec3::new(0.1, 0.05, 0.0)];
         let mut x = [Vec3::new(0.1, -0.05, 0.0)];
@@ -492,6 +557,7 @@ mod tests {
             friction: 0.0,
             thickness: 0.001,
             response: ContactResponse::Stick,
+            prop: false,
         };
         let start = [Vec3::new(0.0, 0.0008, 0.0)];
         let mut x = [Vec3::new(0.01, 0.0009, 0.0)];
@@ -512,6 +578,7 @@ mod tests {
             friction: 0.0,
             thickness: 0.001,
             response: ContactResponse::Regimes(regimes),
+            prop: false,
         }
     }
 

@@ -174,8 +174,8 @@ mod tests {
 
     fn two_touches() -> [Touch; 2] {
         [
-            Touch { particle: 0, normal: Vec3::Y, surface_velocity: Vec3::ZERO, body: 0 },
-            Touch { particle: 1, normal: Vec3::Y, surface_velocity: Vec3::ZERO, body: 0 },
+            Touch { particle: 0, normal: Vec3::Y, surface_velocity: Vec3::ZERO, body: 0, gap: 0.0, sticking: false },
+            Touch { particle: 1, normal: Vec3::Y, surface_velocity: Vec3::ZERO, body: 0, gap: 0.0, sticking: false },
         ]
     }
 

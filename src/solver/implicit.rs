@@ -147,17 +147,21 @@ impl ImplicitWorkspace {
 }
 
 /// A particle touching a body: in the implicit solve its velocity along `normal` is set to
-/// `normal_velocity` [m/s] (the body's), the rest left to the solve — Baraff & Witkin's
-/// constraint by filtering, so that the solver, not a projection after it, keeps cloth
-/// resting on a body.
+/// the body's (`velocity`), the rest left to the solve, or, where static friction holds
+/// it (`stick`), its whole velocity — Baraff & Witkin's constraint by filtering, so that
+/// the solver, not a projection after it, keeps cloth resting on a body.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VelocityConstraint {
     /// The particle.
     pub particle: u32,
     /// Unit normal of the body at the contact, pointing out of the body.
     pub normal: Vec3,
-    /// Velocity along the normal the particle must have at the end of the step [m/s].
-    pub normal_velocity: f32,
+    /// Velocity the particle must have at the end of the step [m/s]: along the normal
+    /// only, or whole when `stick`.
+    pub velocity: Vec3,
+    /// Whether the whole velocity is prescribed (static friction), not only its normal
+    /// part.
+    pub stick: bool,
 }
 
 /// Relative size of a Newton correction below which the step counts as converged.
@@ -197,11 +201,12 @@ pub fn implicit_step(
     ws.prescribed.resize(n, Vec3::ZERO);
     for c in constraints {
         let i = c.particle as usize;
-        let projection = Mat3::IDENTITY - outer(c.normal, c.normal);
+        let projection = if c.stick { Mat3::ZERO } else { Mat3::IDENTITY - outer(c.normal, c.normal) };
         ws.filter[i] = projection * ws.filter[i];
         if dynamics.is_free(i) {
             let current = v[i] + ws.prescribed[i];
-            ws.prescribed[i] += (c.normal_velocity - current.dot(c.normal)) * c.normal;
+            ws.prescribed[i] +=
+                if c.stick { c.velocity - current } else { (c.velocity - current).dot(c.normal) * c.normal };
         }
     }
     let (theta, Rayleigh { alpha, beta }) = (settings.theta, settings.rayleigh);
