@@ -316,7 +316,11 @@ fn solve(
     let pattern = dynamics.pattern();
     match settings.linear_solver {
         LinearSolver::ConjugateGradient => conjugate_gradient(pattern, None, settings, ws),
-        LinearSolver::Multigrid => conjugate_gradient(pattern, Some(dynamics.hierarchy()), settings, ws),
+        LinearSolver::Multigrid => {
+            let iterations = conjugate_gradient(pattern, Some(dynamics.hierarchy()), settings, ws);
+            ws.multigrid.record(iterations);
+            iterations
+        }
         LinearSolver::BlockDescent(descent) => descend(
             pattern,
             dynamics.colouring(),
@@ -370,7 +374,7 @@ fn conjugate_gradient(
         ..
     } = ws;
     match hierarchy {
-        Some(hierarchy) => multigrid.setup(hierarchy, pattern, system, filter),
+        Some(hierarchy) => multigrid.prepare(hierarchy, pattern, system, filter),
         None => (0..filter.len())
             .into_par_iter()
             .with_min_len(PARALLEL_MIN_LEN)

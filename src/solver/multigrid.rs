@@ -13,10 +13,14 @@
 //! Jacobi smoothing is then a fixed, symmetric positive definite preconditioner.
 //!
 //! The grouping depends only on the block pattern, so [`Hierarchy`] is built once per
-//! topology; the numbers ([`Multigrid`]) are rebuilt for each system, in buffers kept from
-//! step to step. Constraint filters `S` (pins, contact normals) act on the finest level:
-//! the prolongator is filtered, `S P`, so coarse corrections never move a pinned particle
-//! or cross a contact normal. Every kernel is a parallel loop over rows or blocks with a
+//! topology. The numbers ([`Multigrid`]) are kept from system to system: the system of a
+//! step differs little from the last one's, so only the finest smoother is rebuilt for
+//! each, and the prolongators and coarse matrices only when the iterations they give have
+//! grown (see [`Multigrid::prepare`]). Constraint filters `S` (pins, contact normals) act
+//! on the finest level: the prolongator is filtered, `S P`, and the current filter is
+//! applied again to what is restricted and prolongated, so coarse corrections never move a
+//! pinned particle or cross a contact normal, even with a prolongator built under another
+//! filter. Every kernel is a parallel loop over rows or blocks with a
 //! fixed order inside, so the result does not depend on the number of threads.
 
 use glam::{Mat3, Vec3};
@@ -45,6 +49,14 @@ const RADIUS_MARGIN: f32 = 1.1;
 
 /// Damped Jacobi smoothing sweeps before and after each coarse correction.
 const SMOOTHING_SWEEPS: usize = 2;
+
+/// The coarse levels are rebuilt once a solve takes more than this many times the
+/// iterations of the first solve after they were built (plus [`REBUILD_SLACK`]).
+const REBUILD_GROWTH: f32 = 1.5;
+
+/// Iterations a solve may take beyond [`REBUILD_GROWTH`] times the first, so that a few
+/// iterations more on a short solve do not rebuild.
+const REBUILD_SLACK: u32 = 2;
 
 /// The structure of the levels: which nodes group into which aggregate, and the block
 /// patterns of the prolongators and coarse matrices. Depends only on the finest pattern.
@@ -195,8 +207,8 @@ struct Level {
     coarse_correction: Vec<Vec3>,
 }
 
-/// The numbers of a [`Hierarchy`] for one system, rebuilt by [`Multigrid::setup`] and
-/// applied by [`Multigrid::apply`]; its buffers are kept from system to system.
+/// The numbers of a [`Hierarchy`], made ready for each system by [`Multigrid::prepare`]
+/// and applied by [`Multigrid::apply`]; kept from system to system.
 #[derive(Debug, Clone, Default)]
 pub struct Multigrid {
     /// Per level that has a coarser one, finest first.
@@ -205,6 +217,14 @@ pub struct Multigrid {
     matrices: Vec<BlockMatrix>,
     /// The coarsest level's direct solver.
     coarsest: CoarsestSolver,
+    /// Whether the coarse levels are stale: none built yet, or the last solve with them
+    /// took too many iterations.
+    rebuild: bool,
+    /// Iterations of the first solve after the coarse levels were built; `None` until
+    /// that solve reports.
+    fresh_iterations: Option<u32>,
+    /// Times the coarse levels were built.
+    builds: u32,
 }
 
 /// The coarsest level's solver: dense Cholesky, or, where the coarsening stalled above
@@ -241,7 +261,7 @@ impl Operator<'_> {
         if diagonal.determinant().abs() > 0.0 { diagonal.inverse() * s } else { Mat3::ZERO }
     }
 
-    /// `out = r − A z`.
+    /// `out = S (r − A z)`.
     fn residual(&self, r: &[Vec3], z: &[Vec3], out: &mut [Vec3]) {
         let (pattern, matrix) = (self.pattern, self.matrix);
         out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, out)| {
@@ -249,7 +269,7 @@ impl Operator<'_> {
             for k in pattern.offsets[i] as usize..pattern.offsets[i + 1] as usize {
                 sum -= matrix.blocks[k] * z[pattern.columns[k] as usize];
             }
-            *out = sum;
+            *out = self.filter(i) * sum;
         });
     }
 }
@@ -387,10 +407,52 @@ impl Level {
 }
 
 impl Multigrid {
-    /// Builds the levels' smoothers, prolongators and matrices, and the coarsest factor,
-    /// for `system` (over `pattern`, the finest level of `hierarchy`) with its unknowns
-    /// restricted by the per-particle `filter`.
-    pub fn setup(&mut self, hierarchy: &Hierarchy, pattern: &BlockPattern, system: &BlockMatrix, filter: &[Mat3]) {
+    /// Makes the preconditioner ready for `system` (over `pattern`, the finest level of
+    /// `hierarchy`) with its unknowns restricted by the per-particle `filter`: the finest
+    /// smoother always, the prolongators, coarse matrices and coarsest factor only when
+    /// they are stale or were built for another hierarchy. Stale coarse levels still give
+    /// a symmetric positive definite V-cycle (a Galerkin matrix of an older system is
+    /// still positive definite, and the smoother is this system's), only a weaker one,
+    /// which [`Multigrid::record`] notices.
+    pub fn prepare(&mut self, hierarchy: &Hierarchy, pattern: &BlockPattern, system: &BlockMatrix, filter: &[Mat3]) {
+        let built_for = |levels: &[Level]| {
+            levels.len() == hierarchy.coarsenings.len()
+                && levels
+                    .iter()
+                    .zip(&hierarchy.coarsenings)
+                    .all(|(level, coarsening)| level.prolongation.blocks.len() == coarsening.prolongation.columns.len())
+                && levels.first().is_none_or(|level| level.inverse_diagonal.len() == pattern.rows())
+        };
+        let current = !self.rebuild && built_for(&self.levels);
+        match self.levels.first_mut() {
+            Some(finest) if current => finest.smoother(Operator { pattern, matrix: system, filter: Some(filter) }),
+            // Stale, another hierarchy, or a single level (the system is the coarsest).
+            _ => self.setup(hierarchy, pattern, system, filter),
+        }
+    }
+
+    /// Takes the iterations the solve preconditioned by the current levels needed, and
+    /// marks the coarse levels stale once they need [`REBUILD_GROWTH`] times more than
+    /// when they were new.
+    pub fn record(&mut self, iterations: u32) {
+        match self.fresh_iterations {
+            None => self.fresh_iterations = Some(iterations),
+            Some(fresh) => {
+                self.rebuild = iterations as f32 > REBUILD_GROWTH * fresh as f32 + REBUILD_SLACK as f32;
+            }
+        }
+    }
+
+    /// Times the coarse levels were built.
+    pub fn builds(&self) -> u32 {
+        self.builds
+    }
+
+    /// Builds the levels' smoothers, prolongators and matrices, and the coarsest factor.
+    fn setup(&mut self, hierarchy: &Hierarchy, pattern: &BlockPattern, system: &BlockMatrix, filter: &[Mat3]) {
+        self.rebuild = false;
+        self.fresh_iterations = None;
+        self.builds += 1;
         let depth = hierarchy.coarsenings.len();
         self.levels.resize_with(depth, Level::default);
         self.matrices.resize_with(depth, BlockMatrix::default);
@@ -455,7 +517,7 @@ fn cycle(
     let coarsening = &coarsenings[0];
     level.smooth(a, r, z, true);
     a.residual(r, z, &mut level.scratch);
-    // r_c = (S P)ᵀ t.
+    // r_c = (S P)ᵀ t, with t = S (r − A z).
     let (restriction, rows, t, blocks) =
         (&coarsening.restriction, &coarsening.restriction_rows, &level.scratch, &level.prolongation.blocks);
     level.coarse_residual.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(c, out)| {
@@ -474,7 +536,11 @@ fn cycle(
         &mut level.coarse_correction,
     );
     level.prolongation.multiply(&coarsening.prolongation, &level.coarse_correction, &mut level.scratch);
-    z.par_iter_mut().zip(level.scratch.par_iter()).with_min_len(PARALLEL_MIN_LEN).for_each(|(z, c)| *z += *c);
+    z.par_iter_mut()
+        .zip(level.scratch.par_iter())
+        .with_min_len(PARALLEL_MIN_LEN)
+        .enumerate()
+        .for_each(|(i, (z, c))| *z += a.filter(i) * *c);
     level.smooth(a, r, z, false);
 }
 
