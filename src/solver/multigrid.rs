@@ -223,8 +223,6 @@ pub struct Multigrid {
     /// Iterations of the first solve after the coarse levels were built; `None` until
     /// that solve reports.
     fresh_iterations: Option<u32>,
-    /// Times the coarse levels were built.
-    builds: u32,
 }
 
 /// The coarsest level's solver: dense Cholesky, or, where the coarsening stalled above
@@ -443,16 +441,10 @@ impl Multigrid {
         }
     }
 
-    /// Times the coarse levels were built.
-    pub fn builds(&self) -> u32 {
-        self.builds
-    }
-
     /// Builds the levels' smoothers, prolongators and matrices, and the coarsest factor.
     fn setup(&mut self, hierarchy: &Hierarchy, pattern: &BlockPattern, system: &BlockMatrix, filter: &[Mat3]) {
         self.rebuild = false;
         self.fresh_iterations = None;
-        self.builds += 1;
         let depth = hierarchy.coarsenings.len();
         self.levels.resize_with(depth, Level::default);
         self.matrices.resize_with(depth, BlockMatrix::default);
