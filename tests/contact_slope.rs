@@ -7,8 +7,6 @@
 
 mod common;
 
-use std::path::Path;
-
 use glam::Vec3;
 use selvedge::Simulation;
 use selvedge::components::Particles;
@@ -21,14 +19,12 @@ const G: f64 = 9.8;
 /// step a frame (1/60 s), where the slope holds the resting cloth by constraints in the
 /// solve and friction comes from their push.
 fn simulation(name: &str, implicit: bool) -> Simulation {
-    if !implicit {
-        return common::bundled(name);
-    }
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
-    let mut file = selvedge::scene::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
-    file.scene.solver.integrator = Integrator::ImplicitEuler;
-    file.scene.solver.substeps = Some(1);
-    Simulation::from_file(&file).unwrap_or_else(|e| panic!("{e}"))
+    common::bundled_with(name, |scene| {
+        if implicit {
+            scene.solver.integrator = Integrator::ImplicitEuler;
+            scene.solver.substeps = Some(1);
+        }
+    })
 }
 
 /// Mean position and velocity of the cloth.

@@ -49,7 +49,13 @@ pub mod oscillator;
 
 /// Builds the bundled scene `scenes/<name>`.
 pub fn bundled(name: &str) -> Simulation {
+    bundled_with(name, |_| {})
+}
+
+/// Builds the bundled scene `scenes/<name>` after `edit` has changed it.
+pub fn bundled_with(name: &str, edit: impl FnOnce(&mut Scene)) -> Simulation {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
-    let file = selvedge::scene::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    let mut file = selvedge::scene::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    edit(&mut file.scene);
     Simulation::from_file(&file).unwrap_or_else(|e| panic!("{e}"))
 }
