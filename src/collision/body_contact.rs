@@ -214,19 +214,19 @@ pub fn resolve_body_contacts(
                 let before_body = *particle.v;
                 outcome.totals.max_penetration = outcome.totals.max_penetration.max(-near.signed);
                 outcome.totals.contact_area = particle.area;
-                let slides = matches!(body.response, ContactResponse::Slide);
-                let mut sticking = slides
-                    && !body.prop
-                    && particle.held == Some(body_index)
-                    && hold(body, near, &particle, &mut outcome.totals);
-                let touches = match body.response {
+                // Whether it touches, whether it sticks, and the gap the next step closes.
+                let (touches, sticking, gap) = match body.response {
                     ContactResponse::Slide => {
-                        sticking |= slide(body, near, &mut particle, h, &mut outcome.totals) && !body.prop;
-                        true
+                        // Only a particle that stuck to this body can be held on it.
+                        let held =
+                            particle.held == Some(body_index) && hold(body, near, &particle, &mut outcome.totals);
+                        let stopped = slide(body, near, &mut particle, h, &mut outcome.totals);
+                        (true, held || (stopped && !body.prop), (near.signed - body.thickness).max(0.0))
                     }
-                    ContactResponse::Stick => stick(body, near, &mut particle, h, &mut outcome.totals),
+                    ContactResponse::Stick => (stick(body, near, &mut particle, h, &mut outcome.totals), false, 0.0),
                     ContactResponse::Regimes(regimes) => {
-                        respond_in_regimes(body, &regimes, near, &mut particle, h, &mut outcome.totals)
+                        let touches = respond_in_regimes(body, &regimes, near, &mut particle, h, &mut outcome.totals);
+                        (touches, false, 0.0)
                     }
                 };
                 if touches {
@@ -235,7 +235,7 @@ pub fn resolve_body_contacts(
                         normal: near.outward,
                         surface_velocity: body.state.velocity_at(*particle.x),
                         body: body_index,
-                        gap: if slides { (near.signed - body.thickness).max(0.0) } else { 0.0 },
+                        gap,
                         sticking,
                     });
                 }
