@@ -345,6 +345,27 @@ fn total(partials: &[f64]) -> f64 {
     partials.iter().sum()
 }
 
+/// Sets every `out[i]` by `update(i, &mut out[i], input[i])`, in parallel over chunks of
+/// [`VECTOR_CHUNK`], and returns the sum of what the updates return, added in index order
+/// within a chunk and chunk by chunk: one pass for a CG vector update and the dot product
+/// it needs.
+fn fused(
+    out: &mut [Vec3],
+    input: &[Vec3],
+    partials: &mut Vec<f64>,
+    update: impl Fn(usize, &mut Vec3, Vec3) -> f64 + Sync,
+) -> f64 {
+    const C: usize = VECTOR_CHUNK;
+    out.par_chunks_mut(C)
+        .zip(input.par_chunks(C))
+        .enumerate()
+        .map(|(c, (out, input))| {
+            out.iter_mut().zip(input).enumerate().fold(0.0, |sum, (k, (o, x))| sum + update(c * C + k, o, *x))
+        })
+        .collect_into_vec(partials);
+    total(partials)
+}
+
 /// Solves `system · delta = rhs` within the constraint filters by preconditioned conjugate
 /// gradients (Baraff & Witkin's modified PCG): `delta` starts as given and only moves
 /// within the filters. The preconditioner is a multigrid V-cycle over `hierarchy` if
@@ -391,37 +412,20 @@ fn conjugate_gradient(
             multigrid.apply(hierarchy, pattern, system, filter, r, z);
         }
         let jacobi = hierarchy.is_none().then_some(&*preconditioner);
-        z.par_chunks_mut(C)
-            .zip(r.par_chunks(C))
-            .enumerate()
-            .map(|(c, (z, r))| {
-                (0..z.len()).fold(0.0, |sum, k| {
-                    if let Some(jacobi) = jacobi {
-                        let i = c * C + k;
-                        z[k] = filter[i] * (jacobi[i] * r[k]);
-                    }
-                    sum + f64::from(r[k].dot(z[k]))
-                })
-            })
-            .collect_into_vec(partials);
-        total(partials)
+        fused(z, r, partials, |i, z, r| {
+            if let Some(jacobi) = jacobi {
+                *z = filter[i] * (jacobi[i] * r);
+            }
+            f64::from(r.dot(*z))
+        })
     };
 
     // r = S (b − A δ), z = M⁻¹ r, d = z.
     system.multiply(pattern, delta, product);
-    residual
-        .par_chunks_mut(C)
-        .zip(product.par_chunks(C))
-        .enumerate()
-        .map(|(c, (r, q))| {
-            (0..r.len()).fold(0.0, |sum, k| {
-                let i = c * C + k;
-                r[k] = filter[i] * (rhs[i] - q[k]);
-                sum + f64::from(r[k].length_squared())
-            })
-        })
-        .collect_into_vec(partials);
-    let mut rr = total(partials);
+    let mut rr = fused(residual, product, partials, |i, r, q| {
+        *r = filter[i] * (rhs[i] - q);
+        f64::from(r.length_squared())
+    });
     let mut rz = precondition(residual, preconditioned, partials);
     direction.copy_from_slice(preconditioned);
     rhs.par_chunks(C)
@@ -435,18 +439,10 @@ fn conjugate_gradient(
         }
         // q = S A d, and d·q.
         system.multiply(pattern, direction, product);
-        product
-            .par_chunks_mut(C)
-            .zip(direction.par_chunks(C))
-            .enumerate()
-            .map(|(c, (q, d))| {
-                (0..q.len()).fold(0.0, |sum, k| {
-                    q[k] = filter[c * C + k] * q[k];
-                    sum + f64::from(d[k].dot(q[k]))
-                })
-            })
-            .collect_into_vec(partials);
-        let curvature = total(partials);
+        let curvature = fused(product, direction, partials, |i, q, d| {
+            *q = filter[i] * *q;
+            f64::from(d.dot(*q))
+        });
         if curvature <= 0.0 {
             return iteration;
         }
