@@ -272,6 +272,15 @@ impl Operator<'_> {
     }
 }
 
+/// Sets the blocks of every slot of `pattern` to `block(row, column)`, in parallel.
+fn fill_blocks(pattern: &BlockPattern, blocks: &mut Vec<Mat3>, block: impl Fn(usize, u32) -> Mat3 + Sync) {
+    (0..pattern.columns.len())
+        .into_par_iter()
+        .with_min_len(PARALLEL_MIN_LEN)
+        .map(|slot| block(pattern.row_of(slot), pattern.columns[slot]))
+        .collect_into_vec(blocks);
+}
+
 /// Euclidean length of a vector of blocks, summed in order.
 fn length(v: &[Vec3]) -> f64 {
     v.iter().map(|x| f64::from(x.length_squared())).sum::<f64>().sqrt()
@@ -322,64 +331,47 @@ impl Level {
     /// The filtered smoothed prolongator `S (I − ω D⁻¹ A) P₀`, `P₀` the aggregates'
     /// translations: block `(i, J)` is `δ_iJ S_i − ω D_i⁻¹ S_i Σ_{k ∈ J} A_ik S_k`.
     fn prolongator(&mut self, a: Operator, coarsening: &Coarsening) {
-        let p = &coarsening.prolongation;
         let (inverse, weight, aggregate) = (&self.inverse_diagonal, self.weight, &coarsening.aggregate);
-        (0..p.columns.len())
-            .into_par_iter()
-            .with_min_len(PARALLEL_MIN_LEN)
-            .map(|slot| {
-                let (i, coarse) = (p.row_of(slot), p.columns[slot]);
-                let mut sum = Mat3::ZERO;
-                for k in a.pattern.offsets[i] as usize..a.pattern.offsets[i + 1] as usize {
-                    let column = a.pattern.columns[k] as usize;
-                    if aggregate[column] == coarse {
-                        sum += a.matrix.blocks[k] * a.filter(column);
-                    }
+        fill_blocks(&coarsening.prolongation, &mut self.prolongation.blocks, |i, coarse| {
+            let mut sum = Mat3::ZERO;
+            for k in a.pattern.offsets[i] as usize..a.pattern.offsets[i + 1] as usize {
+                let column = a.pattern.columns[k] as usize;
+                if aggregate[column] == coarse {
+                    sum += a.matrix.blocks[k] * a.filter(column);
                 }
-                let own = if aggregate[i] == coarse { a.filter(i) } else { Mat3::ZERO };
-                own - weight * (inverse[i] * sum)
-            })
-            .collect_into_vec(&mut self.prolongation.blocks);
+            }
+            let own = if aggregate[i] == coarse { a.filter(i) } else { Mat3::ZERO };
+            own - weight * (inverse[i] * sum)
+        });
     }
 
     /// `A S P` over the product pattern.
     fn product(&mut self, a: Operator, coarsening: &Coarsening) {
-        let (p, ap, prolongation) = (&coarsening.prolongation, &coarsening.product, &self.prolongation);
-        (0..ap.columns.len())
-            .into_par_iter()
-            .with_min_len(PARALLEL_MIN_LEN)
-            .map(|slot| {
-                let (i, coarse) = (ap.row_of(slot), ap.columns[slot]);
-                let (start, end) = (a.pattern.offsets[i] as usize, a.pattern.offsets[i + 1] as usize);
-                let mut sum = Mat3::ZERO;
-                for k in start..end {
-                    if let Some(s) = p.slot(a.pattern.columns[k], coarse) {
-                        sum += a.matrix.blocks[k] * prolongation.blocks[s as usize];
-                    }
+        let (p, prolongation) = (&coarsening.prolongation, &self.prolongation);
+        fill_blocks(&coarsening.product, &mut self.product.blocks, |i, coarse| {
+            let mut sum = Mat3::ZERO;
+            for k in a.pattern.offsets[i] as usize..a.pattern.offsets[i + 1] as usize {
+                if let Some(s) = p.slot(a.pattern.columns[k], coarse) {
+                    sum += a.matrix.blocks[k] * prolongation.blocks[s as usize];
                 }
-                sum
-            })
-            .collect_into_vec(&mut self.product.blocks);
+            }
+            sum
+        });
     }
 
     /// The coarser level's matrix `(S P)ᵀ A S P`.
     fn galerkin(&self, coarsening: &Coarsening, out: &mut BlockMatrix) {
         let Coarsening { restriction, restriction_rows, product: ap, coarse, .. } = coarsening;
-        (0..coarse.columns.len())
-            .into_par_iter()
-            .with_min_len(PARALLEL_MIN_LEN)
-            .map(|slot| {
-                let (row, column) = (coarse.row_of(slot), coarse.columns[slot]);
-                let mut sum = Mat3::ZERO;
-                for k in restriction.offsets[row] as usize..restriction.offsets[row + 1] as usize {
-                    if let Some(t) = ap.slot(restriction_rows[k], column) {
-                        let s = restriction.items[k] as usize;
-                        sum += self.prolongation.blocks[s].transpose() * self.product.blocks[t as usize];
-                    }
+        fill_blocks(coarse, &mut out.blocks, |row, column| {
+            let mut sum = Mat3::ZERO;
+            for k in restriction.offsets[row] as usize..restriction.offsets[row + 1] as usize {
+                if let Some(t) = ap.slot(restriction_rows[k], column) {
+                    let s = restriction.items[k] as usize;
+                    sum += self.prolongation.blocks[s].transpose() * self.product.blocks[t as usize];
                 }
-                sum
-            })
-            .collect_into_vec(&mut out.blocks);
+            }
+            sum
+        });
     }
 
     /// [`SMOOTHING_SWEEPS`] Jacobi steps `z += ω D⁻¹ (r − A z)`; with `first`, from
