@@ -1,6 +1,7 @@
 //! Bricis's drapes over solids (B6), checked by their end state: on a table corner the
 //! cloth rests on the top and hangs over both edges that meet at the corner; over a
-//! cylinder a disk rests on the top and hangs down around it. Nothing ends inside a body.
+//! cylinder a disk rests on the top and hangs down around it. Nothing ends inside a body
+//! or through itself.
 
 mod common;
 
@@ -19,12 +20,19 @@ fn settle(name: &str) -> (Simulation, Vec<Vec3>) {
     (sim, positions)
 }
 
+/// Where the hanging cloth folds, it has not passed through itself.
+fn untangled(name: &str, sim: &Simulation) {
+    let crossed = sim.probes().get("self_intersections").expect("probe");
+    assert_eq!(crossed, 0.0, "{name}: {crossed} pairs of triangles cross");
+}
+
 #[test]
 fn table_corner_drapes_rest_on_the_top_and_hang_over_both_edges() {
     for name in ["bricis_table_cotton.ron", "bricis_table_polyester.ron", "bricis_table_mat.ron"] {
         let (sim, x) = settle(name);
         let kinetic = sim.probes().get("kinetic_energy_j").expect("probe");
         assert!(kinetic < 1e-3, "{name}: still moving, {kinetic} J");
+        untangled(name, &sim);
         // Over the table (away from its edges) the cloth lies on the top, never in it.
         let over: Vec<&Vec3> = x.iter().filter(|p| p.x < -0.03 && p.z < -0.03).collect();
         assert!(over.len() > x.len() / 3, "{name}: only {} particles over the table", over.len());
@@ -46,6 +54,7 @@ fn table_corner_drapes_rest_on_the_top_and_hang_over_both_edges() {
 #[test]
 fn a_disk_rests_on_a_cylinder_and_hangs_around_it() {
     let (sim, x) = settle("bricis_cylinder.ron");
+    untangled("bricis_cylinder.ron", &sim);
     let radial = |p: &Vec3| Vec3::new(p.x, 0.0, p.z).length();
     let top: Vec<&Vec3> = x.iter().filter(|p| radial(p) < 0.1).collect();
     assert!(top.iter().all(|p| (p.y - 0.5).abs() < 0.003), "the centre rests on the top at 0.5 m");
