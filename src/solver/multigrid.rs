@@ -281,6 +281,13 @@ fn fill_blocks(pattern: &BlockPattern, blocks: &mut Vec<Mat3>, block: impl Fn(us
         .collect_into_vec(blocks);
 }
 
+/// A fixed, irregular block for index `i`, each component in [−0.5, 0.5] (Knuth's
+/// multiplicative hash): a vector of these has every direction in it.
+fn irregular(i: u32) -> Vec3 {
+    let h = i.wrapping_mul(2_654_435_761);
+    Vec3::new((h >> 8 & 0xff) as f32, (h >> 16 & 0xff) as f32, (h >> 24) as f32) / 255.0 - 0.5
+}
+
 /// Euclidean length of a vector of blocks, summed in order.
 fn length(v: &[Vec3]) -> f64 {
     v.iter().map(|x| f64::from(x.length_squared())).sum::<f64>().sqrt()
@@ -301,12 +308,9 @@ impl Level {
             .map(|i| a.inverse_diagonal(i))
             .collect_into_vec(&mut self.inverse_diagonal);
         if self.dominant.len() != n {
-            // A start with every direction in it: a fixed, irregular pattern.
+            // A start with every direction in it.
             self.dominant.clear();
-            self.dominant.extend((0..n).map(|i| {
-                let h = (i as u32).wrapping_mul(2_654_435_761);
-                Vec3::new((h >> 8 & 0xff) as f32, (h >> 16 & 0xff) as f32, (h >> 24) as f32) / 255.0 - 0.5
-            }));
+            self.dominant.extend((0..n as u32).map(irregular));
         }
         self.scratch.resize(n, Vec3::ZERO);
         let mut radius = 0.0;
@@ -649,12 +653,7 @@ mod tests {
 
     /// A fixed, irregular vector within `filter`.
     fn probe(filter: &[Mat3], seed: u32) -> Vec<Vec3> {
-        (0..filter.len())
-            .map(|i| {
-                let h = (i as u32 ^ seed).wrapping_mul(2_654_435_761);
-                filter[i] * (Vec3::new((h >> 8 & 0xff) as f32, (h >> 16 & 0xff) as f32, (h >> 24) as f32) / 255.0 - 0.5)
-            })
-            .collect()
+        (0..filter.len()).map(|i| filter[i] * irregular(i as u32 ^ seed)).collect()
     }
 
     fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
