@@ -104,8 +104,7 @@ pub fn add_apparent_inertia(
         let normal = outer(touch.normal, touch.normal);
         share.add_block(mass * (Mat3::IDENTITY - normal), skew_i, skew_i);
         // Along the normals, the system's blocks between particles on this body.
-        let (start, end) = (system.pattern.offsets[i] as usize, system.pattern.offsets[i + 1] as usize);
-        for slot in start..end {
+        for slot in system.pattern.slots(i) {
             let j = system.pattern.columns[slot];
             let Ok(k) = touching.binary_search_by_key(&j, |t| t.particle) else {
                 continue;

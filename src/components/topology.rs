@@ -57,9 +57,14 @@ impl Csr {
         Self { offsets, items: rows }
     }
 
+    /// Where row `row` lies in `items`.
+    pub fn range(&self, row: usize) -> std::ops::Range<usize> {
+        self.offsets[row] as usize..self.offsets[row + 1] as usize
+    }
+
     /// The items of row `row`.
     pub fn row(&self, row: usize) -> &[u32] {
-        &self.items[self.offsets[row] as usize..self.offsets[row + 1] as usize]
+        &self.items[self.range(row)]
     }
 }
 

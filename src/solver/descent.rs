@@ -46,8 +46,7 @@ impl Colouring {
         let mut taken: Vec<bool> = Vec::new();
         for i in 0..rows {
             taken.clear();
-            let row = &pattern.columns[pattern.offsets[i] as usize..pattern.offsets[i + 1] as usize];
-            for &j in row {
+            for &j in pattern.row(i) {
                 let c = colour[j as usize];
                 if c != u32::MAX {
                     if taken.len() <= c as usize {
@@ -161,9 +160,8 @@ pub fn descend(
             let (step, current) = (&ws.step, &*delta);
             ws.update.par_iter_mut().zip(rows.par_iter()).with_min_len(ROWS_PER_TASK).for_each(|(update, &i)| {
                 let i = i as usize;
-                let (start, end) = (pattern.offsets[i] as usize, pattern.offsets[i + 1] as usize);
                 let mut product = Vec3::ZERO;
-                for k in start..end {
+                for k in pattern.slots(i) {
                     product += system.blocks[k] * current[pattern.columns[k] as usize];
                 }
                 let r = filter[i] * (rhs[i] - product);

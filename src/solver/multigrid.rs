@@ -110,8 +110,7 @@ impl Hierarchy {
             let restriction_rows: Vec<u32> =
                 restriction.items.iter().map(|&s| prolongation.row_of(s as usize) as u32).collect();
             let coarse = rows_of(count, |c, row| {
-                let range = restriction.offsets[c] as usize..restriction.offsets[c + 1] as usize;
-                for &fine in &restriction_rows[range] {
+                for &fine in &restriction_rows[restriction.range(c)] {
                     row.extend_from_slice(product.row(fine as usize));
                 }
             });
@@ -264,7 +263,7 @@ impl Operator<'_> {
         let (pattern, matrix) = (self.pattern, self.matrix);
         out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, out)| {
             let mut sum = r[i];
-            for k in pattern.offsets[i] as usize..pattern.offsets[i + 1] as usize {
+            for k in pattern.slots(i) {
                 sum -= matrix.blocks[k] * z[pattern.columns[k] as usize];
             }
             *out = self.filter(i) * sum;
@@ -338,7 +337,7 @@ impl Level {
         let (inverse, weight, aggregate) = (&self.inverse_diagonal, self.weight, &coarsening.aggregate);
         fill_blocks(&coarsening.prolongation, &mut self.prolongation.blocks, |i, coarse| {
             let mut sum = Mat3::ZERO;
-            for k in a.pattern.offsets[i] as usize..a.pattern.offsets[i + 1] as usize {
+            for k in a.pattern.slots(i) {
                 let column = a.pattern.columns[k] as usize;
                 if aggregate[column] == coarse {
                     sum += a.matrix.blocks[k] * a.filter(column);
@@ -354,7 +353,7 @@ impl Level {
         let (p, prolongation) = (&coarsening.prolongation, &self.prolongation);
         fill_blocks(&coarsening.product, &mut self.product.blocks, |i, coarse| {
             let mut sum = Mat3::ZERO;
-            for k in a.pattern.offsets[i] as usize..a.pattern.offsets[i + 1] as usize {
+            for k in a.pattern.slots(i) {
                 if let Some(s) = p.slot(a.pattern.columns[k], coarse) {
                     sum += a.matrix.blocks[k] * prolongation.blocks[s as usize];
                 }
@@ -368,7 +367,7 @@ impl Level {
         let Coarsening { restriction, restriction_rows, product: ap, coarse, .. } = coarsening;
         fill_blocks(coarse, &mut out.blocks, |row, column| {
             let mut sum = Mat3::ZERO;
-            for k in restriction.offsets[row] as usize..restriction.offsets[row + 1] as usize {
+            for k in restriction.range(row) {
                 if let Some(t) = ap.slot(restriction_rows[k], column) {
                     let s = restriction.items[k] as usize;
                     sum += self.prolongation.blocks[s].transpose() * self.product.blocks[t as usize];
@@ -509,8 +508,8 @@ fn cycle(
     let (restriction, rows, t, blocks) =
         (&coarsening.restriction, &coarsening.restriction_rows, &level.scratch, &level.prolongation.blocks);
     level.coarse_residual.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(c, out)| {
-        let range = restriction.offsets[c] as usize..restriction.offsets[c + 1] as usize;
-        *out = range
+        *out = restriction
+            .range(c)
             .fold(Vec3::ZERO, |sum, k| sum + blocks[restriction.items[k] as usize].transpose() * t[rows[k] as usize]);
     });
     let below = Operator { pattern: &coarsening.coarse, matrix: &matrices[0], filter: None };
@@ -553,7 +552,7 @@ impl CoarsestSolver {
         self.unknowns.resize(m, 0.0);
         for i in 0..a.pattern.rows() {
             let si = a.filter(i);
-            for k in a.pattern.offsets[i] as usize..a.pattern.offsets[i + 1] as usize {
+            for k in a.pattern.slots(i) {
                 let j = a.pattern.columns[k] as usize;
                 let mut block = si * a.matrix.blocks[k] * a.filter(j);
                 if i == j {

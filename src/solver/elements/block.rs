@@ -44,9 +44,14 @@ impl BlockPattern {
         self.offsets.len().saturating_sub(1)
     }
 
+    /// The slots of row `i` in the block storage (and in `columns`).
+    pub fn slots(&self, i: usize) -> std::ops::Range<usize> {
+        self.offsets[i] as usize..self.offsets[i + 1] as usize
+    }
+
     /// The columns of row `i`.
     pub fn row(&self, i: usize) -> &[u32] {
-        &self.columns[self.offsets[i] as usize..self.offsets[i + 1] as usize]
+        &self.columns[self.slots(i)]
     }
 
     /// The row a slot belongs to.
@@ -103,9 +108,8 @@ impl BlockMatrix {
     /// `out = self · x`.
     pub fn multiply(&self, pattern: &BlockPattern, x: &[Vec3], out: &mut [Vec3]) {
         out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, out)| {
-            let (start, end) = (pattern.offsets[i] as usize, pattern.offsets[i + 1] as usize);
             let mut sum = Vec3::ZERO;
-            for k in start..end {
+            for k in pattern.slots(i) {
                 sum += self.blocks[k] * x[pattern.columns[k] as usize];
             }
             *out = sum;
