@@ -5,6 +5,7 @@ use glam::{Mat3, Vec3};
 
 use crate::collision::body_contact::{BodyContactOutput, BodyLoad, ContactBody, resolve_body_contacts};
 use crate::collision::coupling::{ApparentInertia, StepSystem, add_apparent_inertia};
+use crate::collision::features::{ClothSurface, FeatureScratch};
 use crate::collision::self_contact::{ContactMesh, SelfContactReport, SelfContactSolver};
 use crate::components::{
     Cloth, ClothMaterial, ClothTopology, Collider, ContactStats, Particles, Prop, SelfCollision, SolverWorkspace,
@@ -28,6 +29,7 @@ pub fn collide_with_bodies(
         &Cloth,
         &ClothMaterial,
         &mut Particles,
+        &Triangles,
         &ClothTopology,
         &SolverWorkspace,
         &mut ContactStats,
@@ -39,7 +41,7 @@ pub fn collide_with_bodies(
         return;
     }
     let t = clock.step_end(settings.dt);
-    let BodyBuffers { bodies, centres, output, total, inertia } = &mut *buffers;
+    let BodyBuffers { bodies, centres, output, total, inertia, scratch } = &mut *buffers;
     total.clear();
     total.resize(colliders.iter().len(), BodyLoad::default());
     inertia.clear();
@@ -48,7 +50,7 @@ pub fn collide_with_bodies(
     if let Some(rigid) = &rigid {
         centres.extend(colliders.iter().map(|(_, prop)| prop.map(|prop| rigid.0.bodies[prop.body].center_of_mass())));
     }
-    for (cloth, material, mut particles, topology, workspace, mut stats, mut touching) in &mut cloths {
+    for (cloth, material, mut particles, triangles, topology, workspace, mut stats, mut touching) in &mut cloths {
         bodies.clear();
         bodies.extend(colliders.iter().map(|(c, prop)| ContactBody {
             shape: c.shape.clone(),
@@ -77,6 +79,22 @@ pub fn collide_with_bodies(
         stats.0.add(&totals);
         for (sum, load) in total.iter_mut().zip(output.loads.iter()) {
             sum.add(load);
+        }
+        let surface = ClothSurface {
+            edges: &topology.edges,
+            triangles: &triangles.indices,
+            free_inv_mass: &topology.free_inv_mass,
+            start: &workspace.step_start,
+        };
+        // A prop's edges are left to its vertex contacts: pushes given outside the coupling's
+        // apparent inertia threw a box off the hammock (ARCHITECTURE.md).
+        for ((collider, prop), body) in colliders.iter().zip(bodies.iter()) {
+            let (Some(features), None) = (&collider.features, prop) else {
+                continue;
+            };
+            let outcome =
+                features.resolve(&body.state, body.thickness, settings.dt, surface, position, velocity, scratch);
+            stats.0.add(&outcome.totals);
         }
         if rigid.is_some() {
             let matrix = workspace.integrator.implicit.system();
@@ -123,6 +141,8 @@ pub struct BodyBuffers {
     total: Vec<BodyLoad>,
     /// The cloths' apparent inertia on each body.
     inertia: Vec<ApparentInertia>,
+    /// Buffers of the sharp features' contacts.
+    scratch: FeatureScratch,
 }
 
 /// Resolves cloth–cloth contact of every self-colliding cloth, all together as one mesh

@@ -6,6 +6,7 @@ pub mod body_contact;
 pub mod bvh;
 pub mod collider;
 pub mod coupling;
+pub mod features;
 pub mod intersection;
 pub mod primitives;
 pub mod self_contact;

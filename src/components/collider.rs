@@ -1,10 +1,13 @@
 //! Solid bodies cloth collides with, and what contact did to a cloth over a frame.
 
+use std::sync::Arc;
+
 use bevy_ecs::prelude::*;
 use parry3d::shape::SharedShape;
 
 use crate::collision::body_contact::{ContactTotals, Touch};
 use crate::collision::collider::{ColliderMotion, ContactResponse};
+use crate::collision::features::SharpFeatures;
 
 /// A static or kinematic solid body (E5, D11, B5): a parry3d shape that moves along its
 /// motion. Its own entity.
@@ -22,6 +25,24 @@ pub struct Collider {
     pub thickness: f32,
     /// How cloth responds to touching it.
     pub response: ContactResponse,
+    /// Its sharp edges and corners, which cloth edges and triangles meet (polyhedral
+    /// shapes only).
+    pub features: Option<Arc<SharpFeatures>>,
+}
+
+impl Collider {
+    /// A collider of `shape`, with the sharp features found on it.
+    pub fn new(
+        name: String,
+        shape: SharedShape,
+        motion: ColliderMotion,
+        friction: f32,
+        thickness: f32,
+        response: ContactResponse,
+    ) -> Collider {
+        let features = SharpFeatures::of_shape(&shape).map(Arc::new);
+        Collider { name, shape, motion, friction, thickness, response, features }
+    }
 }
 
 impl std::fmt::Debug for Collider {

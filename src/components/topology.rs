@@ -4,6 +4,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 
 use super::{BendingHinges, MembraneTriangles, Springs, Triangles};
+use crate::collision::self_contact::ContactMesh;
 use crate::solver::descent::Colouring;
 use crate::solver::elements::BlockPattern;
 use crate::solver::forces::ForceScratch;
@@ -76,6 +77,8 @@ pub struct ClothTopology {
     pub particle_springs: Csr,
     /// Triangles touching each particle.
     pub particle_triangles: Csr,
+    /// Edges of the triangles, each once, smaller particle first, sorted.
+    pub edges: Vec<[u32; 2]>,
     /// Hinge corners `4 h + c` at each particle.
     pub particle_hinges: Csr,
     /// Face sides `3 f + k` at each hinge: where a hinge's moment comes from.
@@ -130,6 +133,7 @@ impl ClothTopology {
         Self {
             particle_springs: Csr::from_items(count, &springs.pairs),
             particle_triangles: Csr::from_items(count, &triangles.indices),
+            edges: ContactMesh::edges_of(&triangles.indices),
             particle_hinges: Csr::from_corners(count, &hinges.vertices),
             hinge_faces: Csr::from_corners(
                 hinges.vertices.len(),

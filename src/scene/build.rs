@@ -94,17 +94,14 @@ fn edge_loads(rest: &[Vec3], edge: &[u32], traction: Vec3) -> Vec<(u32, Vec3)> {
 /// Spawns the scene's colliders, the ground plane among them.
 fn spawn_colliders(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<(), SceneError> {
     if scene.ground.enabled {
-        world.spawn(Collider {
-            name: "ground".into(),
-            shape: ColliderShape::Plane { normal: Vec3::Y }.build(None).expect("a plane always builds"),
-            motion: ColliderMotion::Static(Pose {
-                translation: Vec3::new(0.0, scene.ground.height, 0.0),
-                ..Pose::default()
-            }),
-            friction: scene.ground.friction,
-            thickness: 0.0,
-            response: ContactResponse::Slide,
-        });
+        world.spawn(Collider::new(
+            "ground".into(),
+            ColliderShape::Plane { normal: Vec3::Y }.build(None).expect("a plane always builds"),
+            ColliderMotion::Static(Pose { translation: Vec3::new(0.0, scene.ground.height, 0.0), ..Pose::default() }),
+            scene.ground.friction,
+            0.0,
+            ContactResponse::Slide,
+        ));
     }
     for (k, desc) in scene.colliders.iter().enumerate() {
         let field = format!("colliders[{k}].shape");
@@ -120,14 +117,7 @@ fn spawn_colliders(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
         } else {
             ColliderMotion::Keyframes(desc.keyframes.clone())
         };
-        world.spawn(Collider {
-            name: desc.name.clone(),
-            shape,
-            motion,
-            friction: desc.friction,
-            thickness: desc.thickness,
-            response: desc.response,
-        });
+        world.spawn(Collider::new(desc.name.clone(), shape, motion, desc.friction, desc.thickness, desc.response));
     }
     if !scene.props.is_empty() {
         spawn_props(world, scene)?;
@@ -161,14 +151,14 @@ fn spawn_props(world: &mut World, scene: &Scene) -> Result<(), SceneError> {
         let collider = ColliderBuilder::new(shape.clone()).mass(desc.mass).friction(desc.friction).build();
         rigid.colliders.insert_with_parent(collider, body, &mut rigid.bodies);
         world.spawn((
-            Collider {
-                name: desc.name.clone(),
+            Collider::new(
+                desc.name.clone(),
                 shape,
-                motion: ColliderMotion::Driven(ColliderState::of_body(&rigid.bodies[body])),
-                friction: desc.friction,
-                thickness: desc.thickness,
-                response: ContactResponse::Slide,
-            },
+                ColliderMotion::Driven(ColliderState::of_body(&rigid.bodies[body])),
+                desc.friction,
+                desc.thickness,
+                ContactResponse::Slide,
+            ),
             Prop { body, coupling: BodyCoupling::default() },
         ));
     }

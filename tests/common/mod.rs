@@ -59,3 +59,36 @@ pub fn bundled_with(name: &str, edit: impl FnOnce(&mut Scene)) -> Simulation {
     edit(&mut file.scene);
     Simulation::from_file(&file).unwrap_or_else(|e| panic!("{e}"))
 }
+
+/// Pairs of a cloth triangle and a face of the polyhedral collider `name` (cuboid or
+/// convex hull) that cross, where the collider is now: the exact triangle test, so a
+/// cloth edge cutting across the body's edge counts even with every cloth vertex outside.
+pub fn body_crossings(simulation: &mut Simulation, name: &str) -> usize {
+    use selvedge::collision::intersection::triangles_intersect;
+    use selvedge::components::{Collider, Particles, Triangles};
+    use selvedge::resources::SimClock;
+
+    let time = simulation.world().resource::<SimClock>().time_s as f32;
+    let world = simulation.world_mut();
+    let collider = world
+        .query::<&Collider>()
+        .iter(world)
+        .find(|c| c.name == name)
+        .unwrap_or_else(|| panic!("no collider {name}"))
+        .clone();
+    let (points, faces) = if let Some(cuboid) = collider.shape.as_cuboid() {
+        cuboid.to_trimesh()
+    } else {
+        collider.shape.as_convex_polyhedron().expect("a cuboid or a convex hull").to_trimesh()
+    };
+    let pose = collider.motion.state_at(time).pose;
+    let points: Vec<_> = points.iter().map(|&p| pose.transform_point(p).as_dvec3()).collect();
+    let mut crossings = 0;
+    for (particles, triangles) in world.query::<(&Particles, &Triangles)>().iter(world) {
+        for t in &triangles.indices {
+            let cloth = t.map(|k| particles.position[k as usize].as_dvec3());
+            crossings += faces.iter().filter(|f| triangles_intersect(cloth, f.map(|k| points[k as usize]))).count();
+        }
+    }
+    crossings
+}

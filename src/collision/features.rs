@@ -1,0 +1,446 @@
+//! A polyhedral collider's sharp features against cloth (E5, Z5). The body-contact kernel
+//! keeps cloth *vertices* out of a body; against a smooth body that suffices, but a box,
+//! a convex hull or a triangle mesh has edges and corners that slip between the
+//! vertices: a cloth edge cuts across a table's rim while both its ends rest outside,
+//! and a box's corner pokes through a cloth triangle without touching any of its
+//! corners. So the collider's sharp convex edges meet the cloth's edges, and its corners
+//! the cloth's triangles, as the cloth–cloth pairs of [`super::self_contact`] do, with
+//! the collider's side infinitely heavy (Zheng eq. 3.30):
+//!
+//! - a pair whose closest points, at the end of the step, lie inside both primitives and
+//!   closer than the contact thickness, or whose paths met during the step (the
+//!   coplanarity cubic of [`Sweep`]), is pushed apart along the normal both primitives
+//!   share (the cross product of the two edges, or the cloth triangle's normal) to the
+//!   contact thickness, on the side the cloth came from;
+//! - the push moves the cloth's vertices by their weights in the pair and their inverse
+//!   masses (pinned vertices stay), and its change of the step's mean velocity is added
+//!   to their velocities, as self-contact does.
+//!
+//! Everything happens in the body's frame at the end of the step, where the body is
+//! still: the cloth's start positions are carried along by the body's motion over the
+//! step, as the vertex trace of [`super::body_contact`] does, so a moving box meets the
+//! cloth with its leading edges. These contacts are frictionless; the vertices' contacts
+//! on the faces give the friction. They serve static and keyframed colliders only: a
+//! prop would take these pushes outside the coupling's apparent inertia
+//! ([`super::coupling`]), and a box on a hammock was thrown off by them.
+
+use std::collections::BTreeMap;
+
+use glam::{Quat, Vec3};
+use parry3d::shape::SharedShape;
+use rayon::prelude::*;
+
+use super::body_contact::ContactTotals;
+use super::bvh::{Aabb, Bvh};
+use super::collider::ColliderState;
+use super::primitives::{Sweep, closest_between_segments, closest_on_triangle};
+use crate::solver::PARALLEL_MIN_LEN;
+use crate::solver::gather::Gather;
+
+/// Cosine of the smallest angle between two faces' normals that makes their common edge
+/// sharp (15°). A cloth edge of length `l` across a ridge of exterior angle `θ` cuts
+/// below it by at most about `l θ / 4`: at 15° and 1 cm edges, under a millimetre, within
+/// any contact thickness; the edges of a finely tessellated smooth body stay out of the
+/// tests.
+const SHARP_COS: f32 = 0.966;
+/// Cosine above which two sharp edges at a vertex count as one straight ridge, which
+/// pokes nothing: the vertex is a corner only where its sharp edges turn.
+const RIDGE_COS: f32 = 0.99;
+/// Passes over the candidate pairs: a push can bring a neighbouring pair into contact.
+const PASSES: u32 = 4;
+/// Distance within which a cloth edge's path meets a feature, for the cubic [m].
+const HIT_TOLERANCE: f32 = 1e-6;
+
+/// The sharp features of a polyhedral collider, in its local frame, with a tree over each
+/// kind.
+#[derive(Debug, Clone)]
+pub struct SharpFeatures {
+    points: Vec<Vec3>,
+    /// Convex edges whose faces meet at more than 15°.
+    edges: Vec<[u32; 2]>,
+    /// Vertices where sharp edges turn.
+    corners: Vec<u32>,
+    edge_tree: Bvh,
+    corner_tree: Bvh,
+}
+
+impl SharpFeatures {
+    /// The sharp features of a cuboid, convex hull or triangle mesh (closed, consistently
+    /// wound); none for smooth shapes (planes, spheres, capsules, cylinders), whose
+    /// surface the vertex contacts already follow, or for a polyhedron with no sharp edge.
+    pub fn of_shape(shape: &SharedShape) -> Option<SharpFeatures> {
+        let (points, triangles) = if let Some(cuboid) = shape.as_cuboid() {
+            cuboid.to_trimesh()
+        } else if let Some(hull) = shape.as_convex_polyhedron() {
+            hull.to_trimesh()
+        } else if let Some(mesh) = shape.as_trimesh() {
+            (mesh.vertices().to_vec(), mesh.indices().to_vec())
+        } else {
+            return None;
+        };
+        Self::from_triangles(points, &triangles)
+    }
+
+    /// The sharp features of a closed mesh. Its winding may be either way round; the sign
+    /// of its volume says which.
+    pub fn from_triangles(points: Vec<Vec3>, triangles: &[[u32; 3]]) -> Option<SharpFeatures> {
+        let corner = |t: [u32; 3]| t.map(|k| points[k as usize]);
+        let volume: f32 = triangles.iter().map(|&t| corner(t)[0].dot(corner(t)[1].cross(corner(t)[2]))).sum();
+        let outward = if volume < 0.0 { -1.0 } else { 1.0 };
+        let normal = |t: [u32; 3]| {
+            let [a, b, c] = corner(t);
+            outward * (b - a).cross(c - a).normalize_or_zero()
+        };
+        let mut faces: BTreeMap<[u32; 2], Vec<usize>> = BTreeMap::new();
+        for (f, t) in triangles.iter().enumerate() {
+            for (p, q) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                faces.entry([p.min(q), p.max(q)]).or_default().push(f);
+            }
+        }
+        let edges: Vec<[u32; 2]> = faces
+            .into_iter()
+            .filter(|(edge, faces)| {
+                let &[f, g] = faces.as_slice() else {
+                    return false;
+                };
+                let (nf, ng) = (normal(triangles[f]), normal(triangles[g]));
+                // g's vertex off this edge lies below f's plane where the edge is convex.
+                let apex = triangles[g].into_iter().find(|k| !edge.contains(k)).expect("a triangle has a third vertex");
+                let convex = nf.dot(points[apex as usize] - points[edge[0] as usize]) < 0.0;
+                convex && nf.dot(ng) < SHARP_COS
+            })
+            .map(|(edge, _)| edge)
+            .collect();
+        if edges.is_empty() {
+            return None;
+        }
+        let direction = |[p, q]: [u32; 2], from: u32| {
+            let to = if p == from { q } else { p };
+            (points[to as usize] - points[from as usize]).normalize_or_zero()
+        };
+        let mut corners: Vec<u32> = edges.iter().flatten().copied().collect();
+        corners.sort_unstable();
+        corners.dedup();
+        corners.retain(|&k| {
+            let at: Vec<Vec3> = edges.iter().filter(|e| e.contains(&k)).map(|&e| direction(e, k)).collect();
+            at.iter().enumerate().any(|(i, a)| at[i + 1..].iter().any(|b| a.dot(*b).abs() < RIDGE_COS))
+        });
+        let edge_boxes: Vec<Aabb> = edges.iter().map(|e| Aabb::around(e.iter().map(|&k| points[k as usize]))).collect();
+        let corner_boxes: Vec<Aabb> = corners.iter().map(|&k| Aabb::around([points[k as usize]])).collect();
+        Some(SharpFeatures {
+            edge_tree: Bvh::build(&edge_boxes),
+            corner_tree: Bvh::build(&corner_boxes),
+            points,
+            edges,
+            corners,
+        })
+    }
+
+    /// Number of sharp edges.
+    pub fn edge_count(&self) -> usize {
+        self.edges.len()
+    }
+
+    /// Number of corners.
+    pub fn corner_count(&self) -> usize {
+        self.corners.len()
+    }
+}
+
+/// The cloth as the feature contacts see it.
+#[derive(Debug, Clone, Copy)]
+pub struct ClothSurface<'a> {
+    /// Edges of its triangles, each once.
+    pub edges: &'a [[u32; 2]],
+    /// Its triangles.
+    pub triangles: &'a [[u32; 3]],
+    /// Inverse masses with pinned particles at zero [1/kg].
+    pub free_inv_mass: &'a [f32],
+    /// Positions at the start of the step [m].
+    pub start: &'a [Vec3],
+}
+
+/// A candidate pair whose boxes over the step meet.
+#[derive(Debug, Clone, Copy)]
+enum Candidate {
+    /// A cloth edge and a sharp edge (indices).
+    Edge(u32, u32),
+    /// A cloth triangle and a corner (indices).
+    Corner(u32, u32),
+}
+
+/// What one collider's features did to one cloth in a step.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FeatureOutcome {
+    /// Pushes given.
+    pub pushes: u32,
+    /// Their impulses on the cloth, as contact totals.
+    pub totals: ContactTotals,
+}
+
+/// Buffers kept from step to step.
+#[derive(Debug, Default)]
+pub struct FeatureScratch {
+    /// The cloth's start positions in the body's frame at the end of the step, carried
+    /// along by the body's motion.
+    start: Vec<Vec3>,
+    /// Its end positions in that frame.
+    end: Vec<Vec3>,
+    candidates: Vec<Candidate>,
+    gather: Gather<Candidate>,
+}
+
+/// A push found for a pair: the cloth vertices and their weights in the pair, the normal
+/// (body frame, pointing to where the cloth belongs) and how far along it the cloth's
+/// point must move [m].
+struct Push {
+    vertices: [u32; 3],
+    weights: [f32; 3],
+    normal: Vec3,
+    depth: f32,
+}
+
+impl SharpFeatures {
+    /// Pushes the cloth's edges off this body's sharp edges and its triangles off its
+    /// corners at the end of a step of `h` [s] that took the cloth from `cloth.start` to
+    /// `x`, with the body at `state` at the step's end; `thickness` is the distance kept
+    /// [m]. Moves `x` and changes `v` by what the pushes changed the step's mean velocity.
+    pub fn resolve(
+        &self,
+        state: &ColliderState,
+        thickness: f32,
+        h: f32,
+        cloth: ClothSurface<'_>,
+        x: &mut [Vec3],
+        v: &mut [Vec3],
+        scratch: &mut FeatureScratch,
+    ) -> FeatureOutcome {
+        let mut outcome = FeatureOutcome::default();
+        let pose = state.pose;
+        cloth
+            .start
+            .par_iter()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .map(|&s| pose.inverse_transform_point(s + h * state.velocity_at(s)))
+            .collect_into_vec(&mut scratch.start);
+        x.par_iter()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .map(|&p| pose.inverse_transform_point(p))
+            .collect_into_vec(&mut scratch.end);
+        self.candidates(cloth, thickness, scratch);
+        let rotation: Quat = pose.rotation;
+        for _ in 0..PASSES {
+            let mut pushed = false;
+            for &candidate in &scratch.candidates {
+                let Some(push) = self.push(candidate, cloth, thickness, &scratch.start, &scratch.end) else {
+                    continue;
+                };
+                let Push { vertices, weights, normal, depth } = push;
+                let inv = vertices.map(|k| cloth.free_inv_mass[k as usize]);
+                let denominator: f32 = (0..3).map(|k| weights[k] * weights[k] * inv[k]).sum();
+                if denominator <= 0.0 {
+                    continue;
+                }
+                let lambda = depth / denominator;
+                let mut impulse = Vec3::ZERO;
+                for k in 0..3 {
+                    let i = vertices[k] as usize;
+                    if inv[k] == 0.0 || weights[k] == 0.0 {
+                        continue;
+                    }
+                    let local = weights[k] * inv[k] * lambda * normal;
+                    let moved = rotation * local;
+                    scratch.end[i] += local;
+                    x[i] += moved;
+                    v[i] += moved / h;
+                    impulse += moved / (h * inv[k]);
+                }
+                outcome.pushes += 1;
+                outcome.totals.impulse += impulse;
+                outcome.totals.normal_impulse += impulse.length();
+                pushed = true;
+            }
+            if !pushed {
+                break;
+            }
+        }
+        outcome
+    }
+
+    /// Lists the pairs whose boxes over the step, grown by the thickness, meet.
+    fn candidates(&self, cloth: ClothSurface<'_>, thickness: f32, scratch: &mut FeatureScratch) {
+        let FeatureScratch { start, end, candidates, gather } = scratch;
+        let (start, end) = (&*start, &*end);
+        let swept = |vertices: &[u32]| {
+            Aabb::around(vertices.iter().flat_map(|&k| [start[k as usize], end[k as usize]])).inflated(thickness)
+        };
+        let moves = |vertices: &[u32]| vertices.iter().any(|&k| cloth.free_inv_mass[k as usize] > 0.0);
+        let edges = cloth.edges.len();
+        gather.run(edges + cloth.triangles.len(), candidates, |i, out| {
+            if let Some(t) = i.checked_sub(edges) {
+                let triangle = &cloth.triangles[t];
+                if moves(triangle) {
+                    self.corner_tree.query(&swept(triangle), |k| out.push(Candidate::Corner(t as u32, k)));
+                }
+            } else {
+                let edge = &cloth.edges[i];
+                if moves(edge) {
+                    self.edge_tree.query(&swept(edge), |k| out.push(Candidate::Edge(i as u32, k)));
+                }
+            }
+        });
+    }
+
+    /// The push a candidate needs, if its primitives are closer than `thickness` at the
+    /// end of the step (`end`) or their paths from `start` met.
+    fn push(
+        &self,
+        candidate: Candidate,
+        cloth: ClothSurface<'_>,
+        thickness: f32,
+        start: &[Vec3],
+        end: &[Vec3],
+    ) -> Option<Push> {
+        let inside = |w: f32| w > 0.0 && w < 1.0;
+        match candidate {
+            Candidate::Edge(e, k) => {
+                let [a, b] = cloth.edges[e as usize];
+                let [p, q] = self.edges[k as usize].map(|k| self.points[k as usize]);
+                let (a0, b0, a1, b1) = (start[a as usize], start[b as usize], end[a as usize], end[b as usize]);
+                let (s, u) = closest_between_segments(a1, b1, p, q);
+                let near = inside(s) && inside(u) && a1.lerp(b1, s).distance(p.lerp(q, u)) < thickness;
+                let (s, u) = if near {
+                    (s, u)
+                } else {
+                    Sweep { start: [a0, b0, p, q], end: [a1, b1, p, q] }.edge_edge_hit(HIT_TOLERANCE)?.1
+                };
+                if !(inside(s) && inside(u)) {
+                    return None;
+                }
+                let point = p.lerp(q, u);
+                let normal = side((b0 - a0).cross(q - p), (b1 - a1).cross(q - p), a0.lerp(b0, s) - point)?;
+                let depth = thickness - normal.dot(a1.lerp(b1, s) - point);
+                (depth > 0.0).then_some(Push { vertices: [a, b, a], weights: [1.0 - s, s, 0.0], normal, depth })
+            }
+            Candidate::Corner(t, k) => {
+                let triangle = cloth.triangles[t as usize];
+                let [a0, b0, c0] = triangle.map(|i| start[i as usize]);
+                let [a1, b1, c1] = triangle.map(|i| end[i as usize]);
+                let point = self.points[self.corners[k as usize] as usize];
+                let w = closest_on_triangle(point, a1, b1, c1);
+                let at = |w: [f32; 3], [a, b, c]: [Vec3; 3]| w[0] * a + w[1] * b + w[2] * c;
+                let near = w.iter().all(|&w| w > 0.0) && at(w, [a1, b1, c1]).distance(point) < thickness;
+                let w = if near {
+                    w
+                } else {
+                    Sweep { start: [point, a0, b0, c0], end: [point, a1, b1, c1] }.point_triangle_hit(HIT_TOLERANCE)?.1
+                };
+                if !w.iter().all(|&w| w > 0.0) {
+                    return None;
+                }
+                let normal = side((b0 - a0).cross(c0 - a0), (b1 - a1).cross(c1 - a1), at(w, [a0, b0, c0]) - point)?;
+                let depth = thickness - normal.dot(at(w, [a1, b1, c1]) - point);
+                (depth > 0.0).then_some(Push { vertices: triangle, weights: w, normal, depth })
+            }
+        }
+    }
+}
+
+/// The unit normal at the end of the step (along `end`) pointing to the side of the
+/// feature the cloth was on at the start (`offset` from the feature, measured along
+/// `start`): the side it must end on. None where either normal is degenerate (parallel
+/// edges, a collapsed triangle) or the cloth started on the feature.
+fn side(start: Vec3, end: Vec3, offset: Vec3) -> Option<Vec3> {
+    let (start, end) = (start.try_normalize()?, end.try_normalize()?);
+    let before = start.dot(offset);
+    if before == 0.0 {
+        return None;
+    }
+    let sign = before.signum() * start.dot(end).signum();
+    Some(sign * end)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cube() -> SharpFeatures {
+        let shape = SharedShape::cuboid(0.5, 0.5, 0.5);
+        SharpFeatures::of_shape(&shape).expect("a cube has sharp edges")
+    }
+
+    #[test]
+    fn a_cube_has_twelve_edges_and_eight_corners_and_a_ball_none() {
+        let cube = cube();
+        assert_eq!((cube.edge_count(), cube.corner_count()), (12, 8));
+        assert!(SharpFeatures::of_shape(&SharedShape::ball(1.0)).is_none());
+        // An octahedron wound the other way round: the sign of its volume corrects it.
+        let points = vec![Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
+        let mut triangles = Vec::new();
+        for (a, b) in [(0, 2), (2, 1), (1, 3), (3, 0)] {
+            triangles.push([a, 4, b]);
+            triangles.push([b, 5, a]);
+        }
+        let octahedron = SharpFeatures::from_triangles(points, &triangles).expect("sharp");
+        assert_eq!((octahedron.edge_count(), octahedron.corner_count()), (12, 6));
+    }
+
+    /// A cloth edge falling across the top edge of a cube, with both its ends clear of the
+    /// cube at the end of the step (one above the top face's plane, one beside the side
+    /// face's), is stopped at the contact thickness off the cube's edge.
+    #[test]
+    fn a_cloth_edge_falling_across_a_cube_edge_is_kept_off_it() {
+        let cube = cube();
+        let state = ColliderState { pose: parry3d::math::Pose3::IDENTITY, linear: Vec3::ZERO, angular: Vec3::ZERO };
+        // Across the edge at y = z = 0.5 (along x): from over the top to beside the side.
+        let start = [Vec3::new(0.1, 0.8, 0.45), Vec3::new(0.1, 0.45, 0.8)];
+        let fall = Vec3::new(0.0, -0.15, -0.15);
+        let mut x = start.map(|p| p + fall);
+        let mut v = [fall / 0.01; 2];
+        let thickness = 0.01;
+        let cloth = ClothSurface { edges: &[[0, 1]], triangles: &[], free_inv_mass: &[1.0, 1.0], start: &start };
+        let outcome = cube.resolve(&state, thickness, 0.01, cloth, &mut x, &mut v, &mut FeatureScratch::default());
+        assert!(outcome.pushes > 0);
+        let edge_line = |p: Vec3| Vec3::new(0.0, p.y - 0.5, p.z - 0.5);
+        let middle = edge_line(x[0].lerp(x[1], 0.5));
+        let outward = Vec3::new(0.0, 1.0, 1.0).normalize();
+        assert!((middle.dot(outward) - thickness).abs() < 1e-4, "the edge's middle is {middle} off the cube's edge");
+        // The impulse reported is the momentum the pushes gave the cloth.
+        let given: Vec3 = v.iter().map(|v| *v - fall / 0.01).sum();
+        assert!((given - outcome.totals.impulse).length() < 1e-3 * given.length());
+    }
+
+    /// A cube moving up into a resting cloth triangle meets it with its top corner, which
+    /// would pass through the triangle between its vertices: the triangle is pushed ahead
+    /// of the corner and ends a thickness above it.
+    #[test]
+    fn a_rising_corner_lifts_a_triangle_it_would_poke_through() {
+        let cube = cube();
+        // Rotated so that one corner points straight up, moving up at 1 m/s.
+        let up = Quat::from_rotation_arc(Vec3::ONE.normalize(), Vec3::Y);
+        let h = 0.05;
+        let apex = 3f32.sqrt() * 0.5;
+        let state = ColliderState {
+            pose: parry3d::math::Pose3::from_parts(Vec3::ZERO, up),
+            linear: Vec3::Y,
+            angular: Vec3::ZERO,
+        };
+        // A wide triangle resting just above the apex's start (which is apex − h).
+        let y = apex - 0.02;
+        let start = [Vec3::new(-1.0, y, -1.0), Vec3::new(1.0, y, -1.0), Vec3::new(0.0, y, 1.0)];
+        let mut x = start;
+        let mut v = [Vec3::ZERO; 3];
+        let thickness = 0.005;
+        let cloth = ClothSurface {
+            edges: &[[0, 1], [1, 2], [0, 2]],
+            triangles: &[[0, 1, 2]],
+            free_inv_mass: &[1.0; 3],
+            start: &start,
+        };
+        cube.resolve(&state, thickness, h, cloth, &mut x, &mut v, &mut FeatureScratch::default());
+        // The apex lies under the point with weights (¼, ¼, ½).
+        let over = 0.25 * (x[0] + x[1]) + 0.5 * x[2];
+        assert!((over.y - (apex + thickness)).abs() < 1e-4, "the triangle ends at {over} over the apex at {apex}");
+        assert!(v.iter().all(|v| v.y > 0.0), "and moves up with it");
+    }
+}
