@@ -169,14 +169,16 @@ pub fn collide_cloths(
     }
     if !members().eq(contacts.members.iter().copied()) {
         let mut mesh = ContactMesh::default();
-        for (_, particles, triangles, _, _, _, collision) in &cloths {
+        for (_, particles, triangles, topology, _, _, collision) in &cloths {
             let offset = mesh.half_gap.len() as u32;
             mesh.triangles.extend(triangles.indices.iter().map(|t| t.map(|k| k + offset)));
+            // Each cloth's edges are sorted and numbered above the last cloth's, so the
+            // whole list is sorted too.
+            mesh.edges.extend(topology.edges.iter().map(|e| e.map(|k| k + offset)));
             mesh.half_gap.extend(std::iter::repeat_n(0.5 * collision.separation, particles.len()));
             mesh.friction.extend(std::iter::repeat_n(collision.friction, particles.len()));
             mesh.layer.extend(std::iter::repeat_n(collision.layer, particles.len()));
         }
-        mesh.edges = ContactMesh::edges_of(&mesh.triangles);
         contacts.mesh = mesh;
         // A new mesh may start tangled: the solver starts over, looking for crossings.
         contacts.solver = SelfContactSolver::default();
