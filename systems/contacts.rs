@@ -92,9 +92,9 @@ pub fn collide_with_bodies(
             let (Some(features), None) = (&collider.features, prop) else {
                 continue;
             };
-            let outcome =
+            let pushes =
                 features.resolve(&body.state, body.thickness, settings.dt, surface, position, velocity, scratch);
-            stats.0.add(&outcome.totals);
+            stats.0.add(&pushes);
         }
         if rigid.is_some() {
             let matrix = workspace.integrator.implicit.system();

@@ -7,17 +7,26 @@
 mod common;
 
 use glam::Vec3;
+use selvedge::Simulation;
 use selvedge::components::Particles;
+
+/// Runs the bundled scene `name` to its end, checking after every frame that no cloth
+/// triangle crosses the collider `body`; returns the simulation and the cloth's particles.
+fn run_clear_of(name: &str, body: &str) -> (Simulation, Particles) {
+    let mut sim = common::bundled(name);
+    for frame in 0..sim.counts().time.frames {
+        sim.step_frame().unwrap_or_else(|e| panic!("{e}"));
+        let crossed = common::body_crossings(&mut sim, body);
+        assert_eq!(crossed, 0, "frame {frame}: {crossed} cloth triangles cross the {body}");
+    }
+    let particles = sim.world_mut().query::<&Particles>().single(sim.world()).expect("one cloth").clone();
+    (sim, particles)
+}
 
 #[test]
 fn a_thin_blade_drags_a_hanging_sheet_by_its_edges() {
-    let mut sim = common::bundled("blade.ron");
-    for frame in 0..sim.counts().time.frames {
-        sim.step_frame().unwrap_or_else(|e| panic!("{e}"));
-        let crossed = common::body_crossings(&mut sim, "blade");
-        assert_eq!(crossed, 0, "frame {frame}: {crossed} cloth triangles cross the blade");
-    }
-    let x = sim.world_mut().query::<&Particles>().single(sim.world()).expect("one cloth").position.clone();
+    let (_, particles) = run_clear_of("blade.ron", "blade");
+    let x = particles.position;
     // The particles on either side of the blade, in the rows it spans (y 0.9 to 1.1).
     let beside: Vec<&Vec3> =
         x.iter().filter(|p| (p.y - 1.0).abs() < 0.12 && (p.x.abs() < 0.01 || (p.x - 0.05).abs() < 0.01)).collect();
@@ -30,13 +39,7 @@ fn a_thin_blade_drags_a_hanging_sheet_by_its_edges() {
 
 #[test]
 fn a_pyramid_apex_holds_a_coarse_cloth_up() {
-    let mut sim = common::bundled("pyramid_drape.ron");
-    for frame in 0..sim.counts().time.frames {
-        sim.step_frame().unwrap_or_else(|e| panic!("{e}"));
-        let crossed = common::body_crossings(&mut sim, "pyramid");
-        assert_eq!(crossed, 0, "frame {frame}: {crossed} cloth triangles cross the pyramid");
-    }
-    let p = sim.world_mut().query::<&Particles>().single(sim.world()).expect("one cloth").clone();
+    let (sim, p) = run_clear_of("pyramid_drape.ron", "pyramid");
     let weight: f32 = p.inv_mass.iter().map(|w| 9.81 / w).sum();
     // At rest on the pyramid and the ground, the contact force (the corner and edge pushes
     // among it) carries the weight.

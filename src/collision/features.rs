@@ -169,15 +169,6 @@ enum Candidate {
     Corner(u32, u32),
 }
 
-/// What one collider's features did to one cloth in a step.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct FeatureOutcome {
-    /// Pushes given.
-    pub pushes: u32,
-    /// Their impulses on the cloth, as contact totals.
-    pub totals: ContactTotals,
-}
-
 /// Buffers kept from step to step.
 #[derive(Debug, Default)]
 pub struct FeatureScratch {
@@ -204,7 +195,8 @@ impl SharpFeatures {
     /// Pushes the cloth's edges off this body's sharp edges and its triangles off its
     /// corners at the end of a step of `h` [s] that took the cloth from `cloth.start` to
     /// `x`, with the body at `state` at the step's end; `thickness` is the distance kept
-    /// [m]. Moves `x` and changes `v` by what the pushes changed the step's mean velocity.
+    /// [m]. Moves `x` and changes `v` by what the pushes changed the step's mean velocity,
+    /// and returns the pushes' impulses on the cloth as contact totals.
     pub fn resolve(
         &self,
         state: &ColliderState,
@@ -214,8 +206,8 @@ impl SharpFeatures {
         x: &mut [Vec3],
         v: &mut [Vec3],
         scratch: &mut FeatureScratch,
-    ) -> FeatureOutcome {
-        let mut outcome = FeatureOutcome::default();
+    ) -> ContactTotals {
+        let mut totals = ContactTotals::default();
         let pose = state.pose;
         cloth
             .start
@@ -255,16 +247,15 @@ impl SharpFeatures {
                     v[i] += moved / h;
                     impulse += moved / (h * inv[k]);
                 }
-                outcome.pushes += 1;
-                outcome.totals.impulse += impulse;
-                outcome.totals.normal_impulse += impulse.length();
+                totals.impulse += impulse;
+                totals.normal_impulse += impulse.length();
                 pushed = true;
             }
             if !pushed {
                 break;
             }
         }
-        outcome
+        totals
     }
 
     /// Lists the pairs whose boxes over the step, grown by the thickness, meet.
@@ -399,15 +390,15 @@ mod tests {
         let mut v = [fall / 0.01; 2];
         let thickness = 0.01;
         let cloth = ClothSurface { edges: &[[0, 1]], triangles: &[], free_inv_mass: &[1.0, 1.0], start: &start };
-        let outcome = cube.resolve(&state, thickness, 0.01, cloth, &mut x, &mut v, &mut FeatureScratch::default());
-        assert!(outcome.pushes > 0);
+        let totals = cube.resolve(&state, thickness, 0.01, cloth, &mut x, &mut v, &mut FeatureScratch::default());
+        assert!(totals.impulse != Vec3::ZERO, "a push was given");
         let edge_line = |p: Vec3| Vec3::new(0.0, p.y - 0.5, p.z - 0.5);
         let middle = edge_line(x[0].lerp(x[1], 0.5));
         let outward = Vec3::new(0.0, 1.0, 1.0).normalize();
         assert!((middle.dot(outward) - thickness).abs() < 1e-4, "the edge's middle is {middle} off the cube's edge");
         // The impulse reported is the momentum the pushes gave the cloth.
         let given: Vec3 = v.iter().map(|v| *v - fall / 0.01).sum();
-        assert!((given - outcome.totals.impulse).length() < 1e-3 * given.length());
+        assert!((given - totals.impulse).length() < 1e-3 * given.length());
     }
 
     /// A cube moving up into a resting cloth triangle meets it with its top corner, which
