@@ -174,6 +174,10 @@ pub struct SelfContactSolver {
     untangler: Untangler,
     /// Candidate pairs whose swept boxes meet.
     pairs: Vec<Pair>,
+    /// The end positions the candidates were listed for.
+    listed_end: Vec<Vec3>,
+    /// Vertices a pass of continuous collision moved or left colliding.
+    dirty: Vec<bool>,
     /// Proximity contacts among the candidates.
     contacts: Vec<Contact>,
     /// Candidates whose paths touch.
@@ -208,6 +212,7 @@ impl SelfContactSolver {
         self.mean_velocity.clear();
         self.mean_velocity.extend(x0.iter().zip(x1.iter()).map(|(a, b)| (*b - *a) / h));
         self.initial_velocity.clone_from(&self.mean_velocity);
+        self.dirty.resize(mesh.len(), false);
 
         // 1. Proximity at the start of the step.
         self.candidates(mesh, x0, x1);
@@ -219,22 +224,32 @@ impl SelfContactSolver {
         }
         advance(x0, &self.mean_velocity, h, x1);
 
-        // 2. Continuous collision, pass after pass. The proximity candidates still cover
-        // the sweeps if proximity moved no end point by more than half the margin.
-        let margin = self.margin(mesh);
-        let moved = x1
-            .iter()
-            .zip(&self.initial_velocity)
-            .zip(x0)
-            .fold(0.0f32, |m, ((x1, v), x0)| m.max((*x1 - (*x0 + h * *v)).length()));
-        let mut fresh = moved < 0.5 * margin;
+        // 2. Continuous collision, pass after pass. The candidates are listed again only
+        // when some end point has moved by half the margin since they were; and since a
+        // pair's sweep depends on its four vertices alone, a pass after the first looks
+        // only at pairs sharing a vertex with the last pass's hits (the only vertices its
+        // impulses moved, and the hits that may remain).
         let mut remaining = true;
+        let mut first = true;
         for _ in 0..IMPACT_PASSES {
-            if !fresh {
+            let covered = self.candidates_cover(mesh, x1);
+            if !covered {
                 self.candidates(mesh, x0, x1);
             }
-            fresh = false;
-            self.impacts(mesh, h, x0, x1);
+            if first || !covered {
+                self.impacts(mesh, h, x0, x1, None);
+            } else {
+                self.dirty.fill(false);
+                for &pair in &self.hits {
+                    for k in pair_vertices(mesh, pair) {
+                        self.dirty[k as usize] = true;
+                    }
+                }
+                let dirty = std::mem::take(&mut self.dirty);
+                self.impacts(mesh, h, x0, x1, Some(&dirty));
+                self.dirty = dirty;
+            }
+            first = false;
             if self.hits.is_empty() {
                 remaining = false;
                 break;
@@ -258,7 +273,7 @@ impl SelfContactSolver {
             self.zone.extend(0..mesh.len() as u32);
             loop {
                 self.candidates(mesh, x0, x1);
-                self.impacts(mesh, h, x0, x1);
+                self.impacts(mesh, h, x0, x1, None);
                 if self.hits.is_empty() {
                     break;
                 }
@@ -308,6 +323,8 @@ impl SelfContactSolver {
     /// pairs first, each point's and each edge's sorted.
     fn candidates(&mut self, mesh: &ContactMesh, x0: &[Vec3], x1: &[Vec3]) {
         self.refit(mesh, x0, x1);
+        self.listed_end.clear();
+        self.listed_end.extend_from_slice(x1);
         let (triangle_tree, edge_tree, edge_boxes) = (&self.triangle_tree, &self.edge_tree, &self.edge_boxes);
         let exempt = &self.untangler.exempt;
         let free = |vertices: &[u32]| !vertices.iter().any(|&k| exempt[k as usize]);
@@ -342,11 +359,26 @@ impl SelfContactSolver {
         });
     }
 
-    /// Lists in `hits` the candidate pairs whose paths from `x0` to `x1` touch.
-    fn impacts(&mut self, mesh: &ContactMesh, h: f32, x0: &[Vec3], x1: &[Vec3]) {
+    /// Whether the candidates still cover the sweeps to `x1`: no end point has moved by
+    /// half the margin since they were listed. (A pair's swept boxes are then each within
+    /// half the margin of those listed, so a pair that can come within its separation
+    /// still had listed boxes closer than twice the margin, which they were grown by.)
+    fn candidates_cover(&self, mesh: &ContactMesh, x1: &[Vec3]) -> bool {
+        let half = 0.5 * self.margin(mesh);
+        let half_squared = half * half;
+        x1.par_iter()
+            .zip(&self.listed_end)
+            .with_min_len(PARALLEL_MIN_LEN)
+            .all(|(now, listed)| now.distance_squared(*listed) < half_squared)
+    }
+
+    /// Lists in `hits` the candidate pairs whose paths from `x0` to `x1` touch, looking
+    /// only at pairs with a vertex in `dirty` if given.
+    fn impacts(&mut self, mesh: &ContactMesh, h: f32, x0: &[Vec3], x1: &[Vec3], dirty: Option<&[bool]>) {
         let pairs = &self.pairs;
+        let wanted = |pair: Pair| dirty.is_none_or(|d| pair_vertices(mesh, pair).iter().any(|&k| d[k as usize]));
         self.pair_gather.run(pairs.len(), &mut self.hits, |i, out| {
-            if impact(mesh, pairs[i], h, x0, x1).is_some() {
+            if wanted(pairs[i]) && impact(mesh, pairs[i], h, x0, x1).is_some() {
                 out.push(pairs[i]);
             }
         });
