@@ -59,6 +59,9 @@ struct Node {
     primitive: u32,
     /// The children of an inner node.
     children: [u32; 2],
+    /// The largest primitive index in the subtree, so that a query for primitives after
+    /// a given one (each pair of a tree with itself once) skips whole subtrees.
+    last: u32,
 }
 
 const INNER: u32 = u32::MAX;
@@ -106,11 +109,16 @@ impl Bvh {
     fn split(&mut self, primitives: &mut [u32], centres: &[Vec3], boxes: &[Aabb]) -> u32 {
         let index = self.nodes.len() as u32;
         if let [primitive] = primitives {
-            self.nodes.push(Node { aabb: boxes[*primitive as usize], primitive: *primitive, children: [0; 2] });
+            self.nodes.push(Node {
+                aabb: boxes[*primitive as usize],
+                primitive: *primitive,
+                children: [0; 2],
+                last: *primitive,
+            });
             self.leaf_of[*primitive as usize] = index;
             return index;
         }
-        self.nodes.push(Node { aabb: Aabb::EMPTY, primitive: INNER, children: [0; 2] });
+        self.nodes.push(Node { aabb: Aabb::EMPTY, primitive: INNER, children: [0; 2], last: 0 });
         let spread = Aabb::around(primitives.iter().map(|&p| centres[p as usize]));
         let extent = spread.max - spread.min;
         let axis = if extent.x >= extent.y && extent.x >= extent.z {
@@ -127,8 +135,9 @@ impl Bvh {
         let (left, right) = primitives.split_at_mut(middle);
         let first = self.split(left, centres, boxes);
         let second = self.split(right, centres, boxes);
-        let aabb = self.nodes[first as usize].aabb.union(self.nodes[second as usize].aabb);
-        self.nodes[index as usize] = Node { aabb, primitive: INNER, children: [first, second] };
+        let (a, b) = (self.nodes[first as usize], self.nodes[second as usize]);
+        self.nodes[index as usize] =
+            Node { aabb: a.aabb.union(b.aabb), primitive: INNER, children: [first, second], last: a.last.max(b.last) };
         index
     }
 
@@ -166,8 +175,16 @@ impl Bvh {
 
     /// Calls `visit` with every primitive whose box overlaps `query`, top-down with
     /// pruning.
-    pub fn query(&self, query: &Aabb, mut visit: impl FnMut(u32)) {
-        if self.nodes.is_empty() {
+    pub fn query(&self, query: &Aabb, visit: impl FnMut(u32)) {
+        self.query_from(query, 0, visit);
+    }
+
+    /// Calls `visit` with every primitive numbered `first` or later whose box overlaps
+    /// `query`, top-down, pruning subtrees whose boxes miss it or whose primitives all
+    /// come before `first`. A node's children are tested before they are pushed.
+    pub fn query_from(&self, query: &Aabb, first: u32, mut visit: impl FnMut(u32)) {
+        let wanted = |node: &Node| node.last >= first && node.aabb.overlaps(query);
+        if self.nodes.first().is_none_or(|root| !wanted(root)) {
             return;
         }
         let mut stack = [0u32; 64];
@@ -175,15 +192,15 @@ impl Bvh {
         while depth > 0 {
             depth -= 1;
             let node = &self.nodes[stack[depth] as usize];
-            if !node.aabb.overlaps(query) {
-                continue;
-            }
             if node.primitive != INNER {
                 visit(node.primitive);
-            } else {
-                stack[depth] = node.children[0];
-                stack[depth + 1] = node.children[1];
-                depth += 2;
+                continue;
+            }
+            for child in node.children {
+                if wanted(&self.nodes[child as usize]) {
+                    stack[depth] = child;
+                    depth += 1;
+                }
             }
         }
     }
@@ -247,6 +264,20 @@ mod tests {
             assert_eq!(found(&tree, q), brute_force(&moved, q));
         }
         assert_eq!(tree.builds(), 1);
+    }
+
+    #[test]
+    fn a_query_from_a_primitive_finds_exactly_the_later_overlapping_ones() {
+        let boxes = cloud(500, 0.0);
+        let tree = Bvh::build(&boxes);
+        for (k, query) in boxes.iter().enumerate().step_by(7) {
+            let first = k as u32 + 1;
+            let mut hits = Vec::new();
+            tree.query_from(query, first, |p| hits.push(p));
+            hits.sort_unstable();
+            let expected: Vec<u32> = brute_force(&boxes, query).into_iter().filter(|&p| p >= first).collect();
+            assert_eq!(hits, expected);
+        }
     }
 
     #[test]

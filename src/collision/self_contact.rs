@@ -335,9 +335,9 @@ impl SelfContactSolver {
                 let e = e as u32;
                 let [a, b] = mesh.edges[e as usize];
                 if free(&[a, b]) {
-                    edge_tree.query(&edge_boxes[e as usize], |f| {
+                    edge_tree.query_from(&edge_boxes[e as usize], e + 1, |f| {
                         let [c, d] = mesh.edges[f as usize];
-                        if f > e && a != c && a != d && b != c && b != d && free(&[c, d]) {
+                        if a != c && a != d && b != c && b != d && free(&[c, d]) {
                             out.push(Pair::EdgeEdge(e, f));
                         }
                     });
