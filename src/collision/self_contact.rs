@@ -230,26 +230,12 @@ impl SelfContactSolver {
         // only at pairs sharing a vertex with the last pass's hits (the only vertices its
         // impulses moved, and the hits that may remain).
         let mut remaining = true;
-        let mut first = true;
-        for _ in 0..IMPACT_PASSES {
+        for pass in 0..IMPACT_PASSES {
             let covered = self.candidates_cover(mesh, x1);
             if !covered {
                 self.candidates(mesh, x0, x1);
             }
-            if first || !covered {
-                self.impacts(mesh, h, x0, x1, None);
-            } else {
-                self.dirty.fill(false);
-                for &pair in &self.hits {
-                    for k in pair_vertices(mesh, pair) {
-                        self.dirty[k as usize] = true;
-                    }
-                }
-                let dirty = std::mem::take(&mut self.dirty);
-                self.impacts(mesh, h, x0, x1, Some(&dirty));
-                self.dirty = dirty;
-            }
-            first = false;
+            self.impacts(mesh, h, x0, x1, pass > 0 && covered);
             if self.hits.is_empty() {
                 remaining = false;
                 break;
@@ -273,7 +259,7 @@ impl SelfContactSolver {
             self.zone.extend(0..mesh.len() as u32);
             loop {
                 self.candidates(mesh, x0, x1);
-                self.impacts(mesh, h, x0, x1, None);
+                self.impacts(mesh, h, x0, x1, false);
                 if self.hits.is_empty() {
                     break;
                 }
@@ -372,11 +358,20 @@ impl SelfContactSolver {
             .all(|(now, listed)| now.distance_squared(*listed) < half_squared)
     }
 
-    /// Lists in `hits` the candidate pairs whose paths from `x0` to `x1` touch, looking
-    /// only at pairs with a vertex in `dirty` if given.
-    fn impacts(&mut self, mesh: &ContactMesh, h: f32, x0: &[Vec3], x1: &[Vec3], dirty: Option<&[bool]>) {
-        let pairs = &self.pairs;
-        let wanted = |pair: Pair| dirty.is_none_or(|d| pair_vertices(mesh, pair).iter().any(|&k| d[k as usize]));
+    /// Lists in `hits` the candidate pairs whose paths from `x0` to `x1` touch. With
+    /// `near_hits`, only the pairs sharing a vertex with the hits listed before are
+    /// looked at: the candidates must be the same and only those vertices moved since.
+    fn impacts(&mut self, mesh: &ContactMesh, h: f32, x0: &[Vec3], x1: &[Vec3], near_hits: bool) {
+        if near_hits {
+            self.dirty.fill(false);
+            for &pair in &self.hits {
+                for k in pair_vertices(mesh, pair) {
+                    self.dirty[k as usize] = true;
+                }
+            }
+        }
+        let (pairs, dirty) = (&self.pairs, &self.dirty);
+        let wanted = |pair: Pair| !near_hits || pair_vertices(mesh, pair).iter().any(|&k| dirty[k as usize]);
         self.pair_gather.run(pairs.len(), &mut self.hits, |i, out| {
             if wanted(pairs[i]) && impact(mesh, pairs[i], h, x0, x1).is_some() {
                 out.push(pairs[i]);
