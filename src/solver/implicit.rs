@@ -221,7 +221,7 @@ pub fn implicit_step(
         ws.rhs[i] = h * ws.start_force[i] + h * h * theta * ws.product[i];
     }
     build_system(settings, h, dynamics, ws);
-    report.iterations += solve(dynamics, settings, true, ws);
+    report.iterations += solve(dynamics, settings, true, x, ws);
     ws.dv.copy_from_slice(&ws.delta);
     ws.constraint_impulses.clear();
     ws.constraint_impulses.resize(constraints.len(), Vec3::ZERO);
@@ -248,7 +248,7 @@ pub fn implicit_step(
                 h * ((1.0 - theta) * (ws.start_force[i] + damping_change) + theta * end_force) - mass * ws.dv[i];
         }
         build_system(settings, h, dynamics, ws);
-        report.iterations += solve(dynamics, settings, false, ws);
+        report.iterations += solve(dynamics, settings, false, x, ws);
         add_constraint_impulses(dynamics.pattern(), constraints, ws);
         for i in 0..n {
             ws.dv[i] += ws.delta[i];
@@ -303,6 +303,7 @@ fn solve(
     dynamics: &impl LinearDynamics,
     settings: &ImplicitSettings,
     prescribe: bool,
+    x: &[Vec3],
     ws: &mut ImplicitWorkspace,
 ) -> u32 {
     // Both solvers start from rest (Δv = 0: the inertial step), never from the last step's
@@ -315,9 +316,9 @@ fn solve(
     }
     let pattern = dynamics.pattern();
     match settings.linear_solver {
-        LinearSolver::ConjugateGradient => conjugate_gradient(pattern, None, settings, ws),
+        LinearSolver::ConjugateGradient => conjugate_gradient(pattern, None, settings, x, ws),
         LinearSolver::Multigrid => {
-            let iterations = conjugate_gradient(pattern, Some(dynamics.hierarchy()), settings, ws);
+            let iterations = conjugate_gradient(pattern, Some(dynamics.hierarchy()), settings, x, ws);
             ws.multigrid.record(iterations);
             iterations
         }
@@ -377,6 +378,7 @@ fn conjugate_gradient(
     pattern: &BlockPattern,
     hierarchy: Option<&Hierarchy>,
     settings: &ImplicitSettings,
+    x: &[Vec3],
     ws: &mut ImplicitWorkspace,
 ) -> u32 {
     const C: usize = VECTOR_CHUNK;
@@ -395,7 +397,7 @@ fn conjugate_gradient(
         ..
     } = ws;
     match hierarchy {
-        Some(hierarchy) => multigrid.prepare(hierarchy, pattern, system, filter),
+        Some(hierarchy) => multigrid.prepare(hierarchy, pattern, system, filter, x),
         None => (0..filter.len())
             .into_par_iter()
             .with_min_len(PARALLEL_MIN_LEN)
