@@ -11,7 +11,7 @@ use selvedge::builders::grid::build_grid;
 use selvedge::components::{BendingDesc, BendingLawDesc, ClothMaterial, ClothTopology, MembraneDesc};
 use selvedge::scene::parse_scene;
 use selvedge::solver::descent::{DescentSettings, DescentWorkspace, descend};
-use selvedge::solver::elements::BlockMatrix;
+use selvedge::solver::elements::{BlockMatrix, VelocityJacobian};
 use selvedge::solver::forces::{Air, ClothDynamics, ForceModel, ForceScratch};
 use selvedge::solver::integrate::{Integrator, IntegratorWorkspace, MethodSettings, step};
 
@@ -97,7 +97,7 @@ fn kernels(c: &mut Criterion) {
         group.bench_function(BenchmarkId::new("forces", &size), |b| {
             b.iter(|| model.eval(black_box(&x), &v, 0.0, &mut scratch, &mut force));
         });
-        let (mut dfdx, mut dfdv) = (BlockMatrix::default(), BlockMatrix::default());
+        let (mut dfdx, mut dfdv) = (BlockMatrix::default(), VelocityJacobian::default());
         group.bench_function(BenchmarkId::new("derivatives", &size), |b| {
             b.iter(|| model.assemble(black_box(&x), &v, 0.0, true, &mut scratch, &mut force, &mut dfdx, &mut dfdv));
         });

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use super::PARALLEL_MIN_LEN;
 use super::descent::Colouring;
 use super::elements::hinge::hinge_angle;
-use super::elements::{BlockMatrix, BlockPattern, SpringElement};
+use super::elements::{BlockMatrix, BlockPattern, SpringElement, VelocityJacobian};
 use super::implicit::LinearDynamics;
 use super::integrate::Dynamics;
 use super::multigrid::Hierarchy;
@@ -244,13 +244,13 @@ impl ForceModel<'_> {
         scratch: &mut ForceScratch,
         out: &mut [Vec3],
         dfdx: &mut BlockMatrix,
-        dfdv: &mut BlockMatrix,
+        dfdv: &mut VelocityJacobian,
     ) {
         self.eval(x, v, t, scratch, out);
         let topology = self.topology;
         let pattern = &topology.pattern;
         dfdx.reset(pattern);
-        dfdv.reset(pattern);
+        dfdv.reset(pattern, (0..self.springs.len()).any(|s| self.spring(s).damping > 0.0));
         for (s, slots) in topology.spring_slots.iter().enumerate() {
             let [i, j] = self.springs.pairs[s].map(|p| p as usize);
             let spring = self.spring(s);
@@ -353,7 +353,7 @@ impl LinearDynamics for ClothDynamics<'_> {
         t: f32,
         force: &mut [Vec3],
         dfdx: &mut BlockMatrix,
-        dfdv: &mut BlockMatrix,
+        dfdv: &mut VelocityJacobian,
     ) {
         self.model.assemble(x, v, t, true, self.scratch, force, dfdx, dfdv);
     }
@@ -361,7 +361,7 @@ impl LinearDynamics for ClothDynamics<'_> {
 
 #[cfg(test)]
 mod tests {
-    use glam::{Affine3A, Mat3};
+    use glam::Affine3A;
 
     use super::*;
     use crate::builders::grid::build_grid;
@@ -415,7 +415,8 @@ mod tests {
         let (x, v) = (&particles.position, &particles.velocity);
         let n = x.len();
         let mut scratch = ForceScratch::default();
-        let (mut force, mut dfdx, mut dfdv) = (vec![Vec3::ZERO; n], BlockMatrix::default(), BlockMatrix::default());
+        let (mut force, mut dfdx, mut dfdv) =
+            (vec![Vec3::ZERO; n], BlockMatrix::default(), VelocityJacobian::default());
         model.assemble(x, v, 0.0, false, &mut scratch, &mut force, &mut dfdx, &mut dfdv);
         let force_at = |x: &[Vec3], v: &[Vec3]| {
             let mut out = vec![Vec3::ZERO; n];
@@ -439,11 +440,9 @@ mod tests {
                 for a in 0..n {
                     let numeric_x = (fxp[a] - fxm[a]) / (2.0 * h);
                     let numeric_v = (fvp[a] - fvm[a]) / (1000.0 * h);
-                    let column = |m: &BlockMatrix| {
-                        let block: Mat3 = m.block(&topology.pattern, a as u32, b as u32);
-                        block.col(axis)
-                    };
-                    let (analytic_x, analytic_v) = (column(&dfdx), column(&dfdv));
+                    let (a, b) = (a as u32, b as u32);
+                    let analytic_x = dfdx.block(&topology.pattern, a, b).col(axis);
+                    let analytic_v = dfdv.block(&topology.pattern, a, b).col(axis);
                     let scale = numeric_x.length().max(analytic_x.length()).max(1.0);
                     assert!(
                         (analytic_x - numeric_x).length() <= 2e-2 * scale,

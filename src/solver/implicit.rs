@@ -24,7 +24,7 @@ use rayon::prelude::*;
 use super::PARALLEL_MIN_LEN;
 use super::descent::{Colouring, DescentSettings, DescentWorkspace, descend};
 use super::elements::spring::outer;
-use super::elements::{BlockMatrix, BlockPattern};
+use super::elements::{BlockMatrix, BlockPattern, VelocityJacobian};
 use super::integrate::{Dynamics, StepReport};
 use super::multigrid::{Hierarchy, Multigrid};
 
@@ -101,7 +101,7 @@ pub trait LinearDynamics: Dynamics {
         t: f32,
         force: &mut [Vec3],
         dfdx: &mut BlockMatrix,
-        dfdv: &mut BlockMatrix,
+        dfdv: &mut VelocityJacobian,
     );
 }
 
@@ -111,7 +111,7 @@ pub struct ImplicitWorkspace {
     force: Vec<Vec3>,
     start_force: Vec<Vec3>,
     dfdx: BlockMatrix,
-    dfdv: BlockMatrix,
+    dfdv: VelocityJacobian,
     system: BlockMatrix,
     rhs: Vec<Vec3>,
     dv: Vec<Vec3>,
@@ -274,8 +274,7 @@ fn build_system(settings: &ImplicitSettings, h: f32, dynamics: &impl LinearDynam
     let (theta, Rayleigh { alpha, beta }) = (settings.theta, settings.rayleigh);
     let pattern = dynamics.pattern();
     let k_weight = h * beta + h * h * theta * theta;
-    ws.system.blocks.clear();
-    ws.system.blocks.extend(ws.dfdv.blocks.iter().zip(&ws.dfdx.blocks).map(|(d, k)| -h * *d - k_weight * *k));
+    ws.dfdv.combine(-h, &ws.dfdx, k_weight, pattern, &mut ws.system);
     ws.system.add_diagonal(pattern, |i| (1.0 + h * alpha) * dynamics.mass(i));
 }
 

@@ -107,10 +107,15 @@ impl BlockMatrix {
 
     /// `out = self · x`.
     pub fn multiply(&self, pattern: &BlockPattern, x: &[Vec3], out: &mut [Vec3]) {
+        Self::multiply_blocks(&self.blocks, pattern, x, out);
+    }
+
+    /// `out = B · x` for `blocks` over `pattern`.
+    fn multiply_blocks(blocks: &[Mat3], pattern: &BlockPattern, x: &[Vec3], out: &mut [Vec3]) {
         out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, out)| {
             let mut sum = Vec3::ZERO;
             for k in pattern.slots(i) {
-                sum += self.blocks[k] * x[pattern.columns[k] as usize];
+                sum += blocks[k] * x[pattern.columns[k] as usize];
             }
             *out = sum;
         });
@@ -119,6 +124,82 @@ impl BlockMatrix {
     /// The block `(row, column)`, zero where the pattern has none.
     pub fn block(&self, pattern: &BlockPattern, row: u32, column: u32) -> Mat3 {
         pattern.slot(row, column).map_or(Mat3::ZERO, |s| self.blocks[s as usize])
+    }
+}
+
+/// ∂f/∂v: a [`BlockMatrix`] over the pattern where springs damp, else its diagonal alone.
+/// Only damped springs fill it off the diagonal (drag is per particle), and a second full
+/// matrix beside ∂f/∂x costs a cloth of triangles some 700 bytes a particle for zeros.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct VelocityJacobian {
+    /// One block per pattern slot when `full`, else one per row.
+    blocks: Vec<Mat3>,
+    full: bool,
+}
+
+impl VelocityJacobian {
+    /// Zeroes the matrix, sized for the whole `pattern` if `full`, else for its diagonal.
+    pub fn reset(&mut self, pattern: &BlockPattern, full: bool) {
+        self.full = full;
+        self.blocks.clear();
+        self.blocks.resize(if full { pattern.columns.len() } else { pattern.rows() }, Mat3::ZERO);
+    }
+
+    /// Adds an element's local blocks at their `slots`. Panics unless reset `full`.
+    pub fn add_local<const N: usize>(&mut self, slots: &[[u32; N]; N], local: &[[Mat3; N]; N]) {
+        assert!(self.full, "off-diagonal blocks need a full velocity Jacobian");
+        for a in 0..N {
+            for b in 0..N {
+                self.blocks[slots[a][b] as usize] += local[a][b];
+            }
+        }
+    }
+
+    /// Adds `diagonal[i] · I` to each diagonal block.
+    pub fn add_diagonal(&mut self, pattern: &BlockPattern, diagonal: impl Fn(usize) -> f32) {
+        for i in 0..pattern.rows() {
+            let slot = if self.full {
+                pattern.slot(i as u32, i as u32).expect("every row has its diagonal")
+            } else {
+                i as u32
+            };
+            self.blocks[slot as usize] += Mat3::from_diagonal(Vec3::splat(diagonal(i)));
+        }
+    }
+
+    /// `out = self · x`.
+    pub fn multiply(&self, pattern: &BlockPattern, x: &[Vec3], out: &mut [Vec3]) {
+        if self.full {
+            return BlockMatrix::multiply_blocks(&self.blocks, pattern, x, out);
+        }
+        out.par_iter_mut().zip(x.par_iter()).zip(self.blocks.par_iter()).with_min_len(PARALLEL_MIN_LEN).for_each(
+            |((out, x), block)| {
+                *out = *block * *x;
+            },
+        );
+    }
+
+    /// The block `(row, column)`, zero where there is none.
+    pub fn block(&self, pattern: &BlockPattern, row: u32, column: u32) -> Mat3 {
+        match self.full {
+            true => pattern.slot(row, column).map_or(Mat3::ZERO, |s| self.blocks[s as usize]),
+            false if row == column => self.blocks[row as usize],
+            false => Mat3::ZERO,
+        }
+    }
+
+    /// `out = a · self − b · other` over `other`'s pattern, slot by slot.
+    pub fn combine(&self, a: f32, other: &BlockMatrix, b: f32, pattern: &BlockPattern, out: &mut BlockMatrix) {
+        out.blocks.clear();
+        if self.full {
+            out.blocks.extend(self.blocks.iter().zip(&other.blocks).map(|(d, k)| a * *d - b * *k));
+            return;
+        }
+        out.blocks.extend(other.blocks.iter().map(|k| -(b * *k)));
+        for (i, d) in self.blocks.iter().enumerate() {
+            let slot = pattern.slot(i as u32, i as u32).expect("every row has its diagonal") as usize;
+            out.blocks[slot] = a * *d - b * other.blocks[slot];
+        }
     }
 }
 
@@ -139,5 +220,39 @@ mod tests {
         let mut out = vec![Vec3::ZERO; 3];
         m.multiply(&pattern, &[Vec3::X, Vec3::Y, Vec3::Z], &mut out);
         assert_eq!(out, vec![Vec3::X, 2.0 * Vec3::Y + Vec3::Z, 3.0 * Vec3::Z + Vec3::Y]);
+    }
+
+    /// The diagonal-only velocity Jacobian multiplies, reads and combines as the full one
+    /// holding the same diagonal does.
+    #[test]
+    fn a_diagonal_velocity_jacobian_acts_as_the_full_one() {
+        let pattern = BlockPattern::from_stencils(3, [&[0u32, 1][..], &[1, 2][..]]);
+        let mut stiffness = BlockMatrix::default();
+        stiffness.reset(&pattern);
+        stiffness.add_local(
+            &pattern.stencil_slots([0, 1]),
+            &[[Mat3::IDENTITY, -Mat3::IDENTITY], [-Mat3::IDENTITY, Mat3::IDENTITY]],
+        );
+        let [mut diagonal, mut full] = [false, true].map(|full| {
+            let mut d = VelocityJacobian::default();
+            d.reset(&pattern, full);
+            d
+        });
+        for d in [&mut diagonal, &mut full] {
+            d.add_diagonal(&pattern, |i| -(i as f32) - 0.5);
+        }
+        assert_eq!(diagonal.blocks.len(), 3);
+        let x = [Vec3::X, Vec3::Y, Vec3::new(1.0, 2.0, 3.0)];
+        let (mut a, mut b) = (vec![Vec3::ZERO; 3], vec![Vec3::ZERO; 3]);
+        diagonal.multiply(&pattern, &x, &mut a);
+        full.multiply(&pattern, &x, &mut b);
+        assert_eq!(a, b);
+        assert_eq!(diagonal.block(&pattern, 1, 0), Mat3::ZERO);
+        assert_eq!(diagonal.block(&pattern, 2, 2), full.block(&pattern, 2, 2));
+        let (mut a, mut b) = (BlockMatrix::default(), BlockMatrix::default());
+        diagonal.combine(-0.1, &stiffness, 0.3, &pattern, &mut a);
+        full.combine(-0.1, &stiffness, 0.3, &pattern, &mut b);
+        assert_eq!(a, b);
+        assert_eq!(a.block(&pattern, 0, 0), Mat3::from_diagonal(Vec3::splat(0.05 - 0.3)));
     }
 }
