@@ -65,6 +65,11 @@ impl BlockPattern {
         self.columns[start..end].binary_search(&column).ok().map(|k| (start + k) as u32)
     }
 
+    /// Index of row `i`'s diagonal block, which every row has.
+    pub fn diagonal_slot(&self, i: usize) -> usize {
+        self.slot(i as u32, i as u32).expect("every row has its diagonal") as usize
+    }
+
     /// Slots of all `N × N` blocks of a stencil, row-major: where an element's local
     /// blocks go. Panics if the stencil is not in the pattern.
     pub fn stencil_slots<const N: usize>(&self, stencil: [u32; N]) -> [[u32; N]; N] {
@@ -100,22 +105,16 @@ impl BlockMatrix {
     /// Adds `diagonal[i] · I` to each diagonal block.
     pub fn add_diagonal(&mut self, pattern: &BlockPattern, diagonal: impl Fn(usize) -> f32) {
         for i in 0..pattern.rows() {
-            let slot = pattern.slot(i as u32, i as u32).expect("every row has its diagonal");
-            self.blocks[slot as usize] += Mat3::from_diagonal(Vec3::splat(diagonal(i)));
+            self.blocks[pattern.diagonal_slot(i)] += Mat3::from_diagonal(Vec3::splat(diagonal(i)));
         }
     }
 
     /// `out = self · x`.
     pub fn multiply(&self, pattern: &BlockPattern, x: &[Vec3], out: &mut [Vec3]) {
-        Self::multiply_blocks(&self.blocks, pattern, x, out);
-    }
-
-    /// `out = B · x` for `blocks` over `pattern`.
-    fn multiply_blocks(blocks: &[Mat3], pattern: &BlockPattern, x: &[Vec3], out: &mut [Vec3]) {
         out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, out)| {
             let mut sum = Vec3::ZERO;
             for k in pattern.slots(i) {
-                sum += blocks[k] * x[pattern.columns[k] as usize];
+                sum += self.blocks[k] * x[pattern.columns[k] as usize];
             }
             *out = sum;
         });
@@ -132,8 +131,8 @@ impl BlockMatrix {
 /// matrix beside ∂f/∂x costs a cloth of triangles some 700 bytes a particle for zeros.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct VelocityJacobian {
-    /// One block per pattern slot when `full`, else one per row.
-    blocks: Vec<Mat3>,
+    /// Over the pattern when `full`; else one block per row, the diagonal's.
+    matrix: BlockMatrix,
     full: bool,
 }
 
@@ -141,49 +140,49 @@ impl VelocityJacobian {
     /// Zeroes the matrix, sized for the whole `pattern` if `full`, else for its diagonal.
     pub fn reset(&mut self, pattern: &BlockPattern, full: bool) {
         self.full = full;
-        self.blocks.clear();
-        self.blocks.resize(if full { pattern.columns.len() } else { pattern.rows() }, Mat3::ZERO);
+        if full {
+            self.matrix.reset(pattern);
+        } else {
+            self.matrix.blocks.clear();
+            self.matrix.blocks.resize(pattern.rows(), Mat3::ZERO);
+        }
     }
 
     /// Adds an element's local blocks at their `slots`. Panics unless reset `full`.
     pub fn add_local<const N: usize>(&mut self, slots: &[[u32; N]; N], local: &[[Mat3; N]; N]) {
         assert!(self.full, "off-diagonal blocks need a full velocity Jacobian");
-        for a in 0..N {
-            for b in 0..N {
-                self.blocks[slots[a][b] as usize] += local[a][b];
-            }
-        }
+        self.matrix.add_local(slots, local);
     }
 
     /// Adds `diagonal[i] · I` to each diagonal block.
     pub fn add_diagonal(&mut self, pattern: &BlockPattern, diagonal: impl Fn(usize) -> f32) {
-        for i in 0..pattern.rows() {
-            let slot = if self.full {
-                pattern.slot(i as u32, i as u32).expect("every row has its diagonal")
-            } else {
-                i as u32
-            };
-            self.blocks[slot as usize] += Mat3::from_diagonal(Vec3::splat(diagonal(i)));
+        if self.full {
+            return self.matrix.add_diagonal(pattern, diagonal);
+        }
+        for (i, block) in self.matrix.blocks.iter_mut().enumerate() {
+            *block += Mat3::from_diagonal(Vec3::splat(diagonal(i)));
         }
     }
 
     /// `out = self · x`.
     pub fn multiply(&self, pattern: &BlockPattern, x: &[Vec3], out: &mut [Vec3]) {
         if self.full {
-            return BlockMatrix::multiply_blocks(&self.blocks, pattern, x, out);
+            return self.matrix.multiply(pattern, x, out);
         }
-        out.par_iter_mut().zip(x.par_iter()).zip(self.blocks.par_iter()).with_min_len(PARALLEL_MIN_LEN).for_each(
-            |((out, x), block)| {
+        out.par_iter_mut()
+            .zip(x.par_iter())
+            .zip(self.matrix.blocks.par_iter())
+            .with_min_len(PARALLEL_MIN_LEN)
+            .for_each(|((out, x), block)| {
                 *out = *block * *x;
-            },
-        );
+            });
     }
 
     /// The block `(row, column)`, zero where there is none.
     pub fn block(&self, pattern: &BlockPattern, row: u32, column: u32) -> Mat3 {
         match self.full {
-            true => pattern.slot(row, column).map_or(Mat3::ZERO, |s| self.blocks[s as usize]),
-            false if row == column => self.blocks[row as usize],
+            true => self.matrix.block(pattern, row, column),
+            false if row == column => self.matrix.blocks[row as usize],
             false => Mat3::ZERO,
         }
     }
@@ -192,12 +191,12 @@ impl VelocityJacobian {
     pub fn combine(&self, a: f32, other: &BlockMatrix, b: f32, pattern: &BlockPattern, out: &mut BlockMatrix) {
         out.blocks.clear();
         if self.full {
-            out.blocks.extend(self.blocks.iter().zip(&other.blocks).map(|(d, k)| a * *d - b * *k));
+            out.blocks.extend(self.matrix.blocks.iter().zip(&other.blocks).map(|(d, k)| a * *d - b * *k));
             return;
         }
         out.blocks.extend(other.blocks.iter().map(|k| -(b * *k)));
-        for (i, d) in self.blocks.iter().enumerate() {
-            let slot = pattern.slot(i as u32, i as u32).expect("every row has its diagonal") as usize;
+        for (i, d) in self.matrix.blocks.iter().enumerate() {
+            let slot = pattern.diagonal_slot(i);
             out.blocks[slot] = a * *d - b * other.blocks[slot];
         }
     }
@@ -241,7 +240,7 @@ mod tests {
         for d in [&mut diagonal, &mut full] {
             d.add_diagonal(&pattern, |i| -(i as f32) - 0.5);
         }
-        assert_eq!(diagonal.blocks.len(), 3);
+        assert_eq!(diagonal.matrix.blocks.len(), 3);
         let x = [Vec3::X, Vec3::Y, Vec3::new(1.0, 2.0, 3.0)];
         let (mut a, mut b) = (vec![Vec3::ZERO; 3], vec![Vec3::ZERO; 3]);
         diagonal.multiply(&pattern, &x, &mut a);
