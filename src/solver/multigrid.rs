@@ -289,14 +289,18 @@ impl Jacobi {
             return;
         }
         // Per node, its row of its pair's inverse.
-        (0..n)
-            .into_par_iter()
+        self.own.resize(n, Mat3::ZERO);
+        self.partner.resize(n, Mat3::ZERO);
+        self.own
+            .par_chunks_mut(2)
+            .zip(self.partner.par_chunks_mut(2))
+            .enumerate()
             .with_min_len(PARALLEL_MIN_LEN)
-            .map(|i| {
-                let inverse = pair_inverse(a, i / 2);
-                (inverse[i % 2][i % 2], inverse[i % 2][1 - i % 2])
-            })
-            .unzip_into_vecs(&mut self.own, &mut self.partner);
+            .for_each(|(p, (own, partner))| {
+                let [[tt, tr], [rt, rr]] = pair_inverse(a, p);
+                own.copy_from_slice(&[tt, rr]);
+                partner.copy_from_slice(&[tr, rt]);
+            });
     }
 
     /// `(D⁻¹ v)_i`.
@@ -313,11 +317,7 @@ fn pair_inverse(a: Operator, p: usize) -> [[Mat3; 2]; 2] {
     for bi in 0..2 {
         for bj in 0..2 {
             let block = a.matrix.block(a.pattern, (2 * p + bi) as u32, (2 * p + bj) as u32);
-            for (c, column) in [block.x_axis, block.y_axis, block.z_axis].iter().enumerate() {
-                for (r, value) in column.to_array().iter().enumerate() {
-                    factor[(3 * bi + r) * 6 + 3 * bj + c] = f64::from(*value);
-                }
-            }
+            set_dense(&mut factor, 6, bi, bj, block);
         }
     }
     cholesky(&mut factor, 6);
@@ -335,6 +335,15 @@ fn pair_inverse(a: Operator, p: usize) -> [[Mat3; 2]; 2] {
         Mat3::from_cols(column(0), column(1), column(2))
     };
     [[block(0, 0), block(0, 1)], [block(1, 0), block(1, 1)]]
+}
+
+/// Writes `block` as block `(i, j)` of the dense `m × m` row-major matrix `f`.
+fn set_dense(f: &mut [f64], m: usize, i: usize, j: usize, block: Mat3) {
+    for (c, column) in [block.x_axis, block.y_axis, block.z_axis].iter().enumerate() {
+        for (r, value) in column.to_array().iter().enumerate() {
+            f[(3 * i + r) * m + 3 * j + c] = f64::from(*value);
+        }
+    }
 }
 
 /// Factors the symmetric `m × m` matrix `f` (row-major) in place into its lower Cholesky
@@ -860,11 +869,7 @@ impl CoarsestSolver {
                 if i == j {
                     block += Mat3::IDENTITY - si;
                 }
-                for (c, column) in [block.x_axis, block.y_axis, block.z_axis].iter().enumerate() {
-                    for (r, value) in column.to_array().iter().enumerate() {
-                        self.factor[(3 * i + r) * m + 3 * j + c] = f64::from(*value);
-                    }
-                }
+                set_dense(&mut self.factor, m, i, j, block);
             }
         }
         cholesky(&mut self.factor, m);
