@@ -101,6 +101,8 @@ fn kernels(c: &mut Criterion) {
         group.bench_function(BenchmarkId::new("derivatives", &size), |b| {
             b.iter(|| model.assemble(black_box(&x), &v, 0.0, true, &mut scratch, &mut force, &mut dfdx, &mut dfdv));
         });
+        // Assembled here too, so that a filter that skips the bench above leaves a system.
+        model.assemble(&x, &v, 0.0, true, &mut scratch, &mut force, &mut dfdx, &mut dfdv);
         let h = 1.0 / 60.0f32;
         let pattern = &topology.pattern;
         let mut system = BlockMatrix { blocks: dfdx.blocks.iter().map(|k| -h * h * *k).collect() };
@@ -110,6 +112,9 @@ fn kernels(c: &mut Criterion) {
         let one_sweep = DescentSettings { sweeps: 1, spectral_radius: 0.0 };
         let mut descent = DescentWorkspace::default();
         let mut delta = vec![Vec3::ZERO; count];
+        group.bench_function(BenchmarkId::new("matrix_product", &size), |b| {
+            b.iter(|| system.multiply(pattern, black_box(&rhs), &mut delta));
+        });
         group.bench_function(BenchmarkId::new("descent_sweep", &size), |b| {
             b.iter(|| {
                 descend(pattern, &topology.colouring, &system, &rhs, &filter, &one_sweep, 0.0, &mut delta, &mut descent)
