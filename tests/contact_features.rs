@@ -7,25 +7,27 @@
 mod common;
 
 use glam::Vec3;
-use selvedge::Simulation;
 use selvedge::components::Particles;
 
 /// Runs the bundled scene `name` to its end, checking after every frame that no cloth
-/// triangle crosses the collider `body`; returns the simulation and the cloth's particles.
-fn run_clear_of(name: &str, body: &str) -> (Simulation, Particles) {
+/// triangle crosses the collider `body`; returns the cloth's particles and each frame's
+/// `contact_force_n`.
+fn run_clear_of(name: &str, body: &str) -> (Particles, Vec<f64>) {
     let mut sim = common::bundled(name);
+    let mut forces = Vec::new();
     for frame in 0..sim.counts().time.frames {
         sim.step_frame().unwrap_or_else(|e| panic!("{e}"));
         let crossed = common::body_crossings(&mut sim, body);
         assert_eq!(crossed, 0, "frame {frame}: {crossed} cloth triangles cross the {body}");
+        forces.push(common::probe(&sim, "contact_force_n"));
     }
     let particles = sim.world_mut().query::<&Particles>().single(sim.world()).expect("one cloth").clone();
-    (sim, particles)
+    (particles, forces)
 }
 
 #[test]
 fn a_thin_blade_drags_a_hanging_sheet_by_its_edges() {
-    let (_, particles) = run_clear_of("blade.ron", "blade");
+    let (particles, _) = run_clear_of("blade.ron", "blade");
     let x = particles.position;
     // The particles on either side of the blade, in the rows it spans (y 0.9 to 1.1).
     let beside: Vec<&Vec3> =
@@ -39,10 +41,14 @@ fn a_thin_blade_drags_a_hanging_sheet_by_its_edges() {
 
 #[test]
 fn a_pyramid_apex_holds_a_coarse_cloth_up() {
-    let (sim, p) = run_clear_of("pyramid_drape.ron", "pyramid");
+    let (p, forces) = run_clear_of("pyramid_drape.ron", "pyramid");
     let weight: f32 = p.inv_mass.iter().map(|w| 9.81 / w).sum();
-    // At rest on the pyramid and the ground, the contact force (the corner and edge pushes
-    // among it) carries the weight.
-    let force = common::probe(&sim, "contact_force_n") as f32;
+    // On the pyramid and the ground, the contact force (the corner and edge pushes among
+    // it) carries the weight. The cloth balanced on the apex never quite stops (a frame's
+    // force strays by up to 8 % from the weight, and a jolt doubled it for a frame in one
+    // run), so the last second's mean is compared. Measured: 0.4 % and 0.8 % from the
+    // weight in runs whose Jacobians differed only in round-off.
+    let last_second = &forces[forces.len() - 60..];
+    let force = (last_second.iter().sum::<f64>() / 60.0) as f32;
     assert!((force - weight).abs() < 0.02 * weight, "contact force {force} N against a weight of {weight} N");
 }
