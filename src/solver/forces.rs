@@ -82,12 +82,14 @@ pub struct ForceScratch {
 }
 
 /// Elements whose local blocks are computed at once: enough to share among the threads,
-/// few enough that the buffer stays small (a chunk of bending faces is 1.3 MB).
+/// few enough that the buffer stays small (two chunks of bending faces are 2.7 MB).
 const ELEMENT_CHUNK: usize = 1024;
 
 /// Adds the `N × N` local blocks `local(e)` of every element `e` to `matrix` at
-/// `slots[e]`: each chunk's blocks are computed in parallel into `buffer`, then added in
-/// element order, so the sums are the same for any thread count.
+/// `slots[e]`: each chunk's blocks are computed in parallel into one half of `buffer`,
+/// then added in element order while the next chunk is computed into the other half, so
+/// the additions (serial, for sums that are the same on any number of threads) overlap the
+/// element work.
 fn add_elements<const N: usize>(
     matrix: &mut BlockMatrix,
     slots: &[[[u32; N]; N]],
@@ -95,20 +97,40 @@ fn add_elements<const N: usize>(
     local: impl Fn(usize) -> [[Mat3; N]; N] + Sync,
 ) {
     let size = N * N;
-    buffer.resize(ELEMENT_CHUNK.min(slots.len()) * size, Mat3::ZERO);
-    for (chunk, chunk_slots) in slots.chunks(ELEMENT_CHUNK).enumerate() {
+    let half = ELEMENT_CHUNK.min(slots.len()) * size;
+    buffer.resize(2 * half, Mat3::ZERO);
+    let compute = |chunk: usize, blocks: &mut [Mat3]| {
         let first = chunk * ELEMENT_CHUNK;
-        let blocks = &mut buffer[..chunk_slots.len() * size];
-        blocks.par_chunks_mut(size).with_min_len(PARALLEL_MIN_LEN / 8).enumerate().for_each(|(k, out)| {
-            for (out, block) in out.iter_mut().zip(local(first + k).iter().flatten()) {
-                *out = *block;
-            }
-        });
-        for (element_slots, element_blocks) in chunk_slots.iter().zip(blocks.chunks(size)) {
-            for (slot, block) in element_slots.iter().flatten().zip(element_blocks) {
-                matrix.blocks[*slot as usize] += *block;
-            }
-        }
+        let count = ELEMENT_CHUNK.min(slots.len() - first);
+        blocks[..count * size].par_chunks_mut(size).with_min_len(PARALLEL_MIN_LEN / 8).enumerate().for_each(
+            |(k, out)| {
+                for (out, block) in out.iter_mut().zip(local(first + k).iter().flatten()) {
+                    *out = *block;
+                }
+            },
+        );
+    };
+    let (mut ready, mut next) = buffer.split_at_mut(half);
+    let chunks = slots.len().div_ceil(ELEMENT_CHUNK);
+    if chunks > 0 {
+        compute(0, ready);
+    }
+    for (chunk, chunk_slots) in slots.chunks(ELEMENT_CHUNK).enumerate() {
+        rayon::join(
+            || {
+                for (element_slots, element_blocks) in chunk_slots.iter().zip(ready.chunks(size)) {
+                    for (slot, block) in element_slots.iter().flatten().zip(element_blocks) {
+                        matrix.blocks[*slot as usize] += *block;
+                    }
+                }
+            },
+            || {
+                if chunk + 1 < chunks {
+                    compute(chunk + 1, next);
+                }
+            },
+        );
+        std::mem::swap(&mut ready, &mut next);
     }
 }
 

@@ -157,24 +157,23 @@ impl BendingSurface<'_> {
     pub fn face_jacobian(&self, f: usize, x: &[Vec3], delta: &[f32]) -> [[Mat3; 6]; 6] {
         let face = &self.faces[f];
         let (_, _, tangent) = self.rigidity.density(self.law, face.curvature(delta));
-        // ∇κ component by component over the face's vertices.
-        let mut gradient = [[Vec3::ZERO; 6]; 3];
+        // ∇κ by vertex: column c of `gradient[a]` is ∂κ_c/∂x_a.
+        let mut gradient = [Mat3::ZERO; 6];
         for k in (0..3).filter(|&k| face.hinges[k] != NO_HINGE) {
             let h = face.hinges[k] as usize;
             let g = hinge_gradient(self.hinges[h].map(|p| x[p as usize]));
             for (corner, &local) in face.corners[k].iter().enumerate() {
-                for component in 0..3 {
-                    gradient[component][local as usize] += face.coefficients[k][component] * g[corner];
-                }
+                gradient[local as usize] += outer(g[corner], face.coefficients[k]);
             }
         }
+        // Block (a, b) is −A ∇ₐκ W″ ∇_bκᵀ, and block (b, a) its transpose.
+        let weight = Mat3::from_diagonal(-face.area * tangent);
+        let weighted = gradient.map(|g| g * weight);
         let mut blocks = [[Mat3::ZERO; 6]; 6];
         for a in 0..6 {
-            for b in 0..6 {
-                for component in 0..3 {
-                    blocks[a][b] -=
-                        face.area * tangent[component] * outer(gradient[component][a], gradient[component][b]);
-                }
+            for b in a..6 {
+                blocks[a][b] = weighted[a] * gradient[b].transpose();
+                blocks[b][a] = blocks[a][b].transpose();
             }
         }
         blocks
