@@ -594,9 +594,10 @@ impl Level {
             self.dominant.extend((0..n as u32).map(irregular));
         }
         self.scratch.resize(n, Vec3::ZERO);
+        // The length of the iterate, which after an iteration is that iteration's estimate.
+        let mut norm = length(&self.dominant);
         let mut radius = 0.0;
         for iteration in 0..MAX_POWER_ITERATIONS {
-            let norm = length(&self.dominant);
             if norm == 0.0 {
                 break;
             }
@@ -609,7 +610,7 @@ impl Level {
                 .for_each(|(i, x)| *x = inverse.apply(i, scratch) / norm as f32);
             let estimate = length(&self.dominant);
             let settled = iteration > 0 && (estimate - radius).abs() <= POWER_TOLERANCE * estimate;
-            radius = estimate;
+            (radius, norm) = (estimate, estimate);
             if settled {
                 break;
             }
