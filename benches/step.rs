@@ -128,7 +128,8 @@ fn kernels(c: &mut Criterion) {
             let (mut x, mut v) = (x.clone(), v.clone());
             group.bench_function(BenchmarkId::new(format!("integrate/{}", method.name()), &size), |b| {
                 b.iter(|| {
-                    step(method, &mut dynamics, &[], &mut x, &mut v, 0.0, 1e-5, &settings, &mut ws).expect("fixed step")
+                    step(method, &mut dynamics, &mut [], None, &mut x, &mut v, 0.0, 1e-5, &settings, &mut ws)
+                        .expect("fixed step")
                 });
             });
         }

@@ -1,29 +1,29 @@
 //! Contact of cloth with solid bodies and with cloth.
 
 use bevy_ecs::prelude::*;
-use glam::{Mat3, Vec3};
+use glam::Vec3;
 
 use crate::collision::body_contact::{BodyContactOutput, BodyLoad, ContactBody, resolve_body_contacts};
-use crate::collision::coupling::{ApparentInertia, StepSystem, add_apparent_inertia};
+use crate::collision::collider::{ColliderMotion, ColliderState};
 use crate::collision::features::{ClothSurface, FeatureScratch};
 use crate::collision::self_contact::{ContactMesh, SelfContactReport, SelfContactSolver};
 use crate::components::{
     Cloth, ClothMaterial, ClothTopology, Collider, ContactStats, Particles, Prop, SelfCollision, SolverWorkspace,
     Touching, Triangles,
 };
-use crate::resources::{ClothContacts, PropWorld, SimClock, SolverSettings, StepSettings};
+use crate::resources::{ClothContacts, PropWorld, SimClock, StepSettings};
 use crate::schedule::{FrameSystems, SimSchedules, SubstepSystems};
 
 /// Resolves every cloth's contacts with every collider at the end of the step (the
 /// colliders where they are then), and adds what they did to the cloth's
-/// [`ContactStats`]. The props among the colliders take the opposite of the impulses they
-/// gave the cloth, at the points where they gave them, through the cloth's apparent
-/// inertia ([`crate::collision::coupling`]). Runs in [`SubstepSystems::BodyContacts`].
+/// [`ContactStats`]. The props among the colliders first take the velocity the cloth's
+/// implicit steps settled on ([`crate::collision::coupling`]), and then the opposite of
+/// the impulses the contacts gave the cloth, at the points where they gave them. Runs in
+/// [`SubstepSystems::BodyContacts`].
 pub fn collide_with_bodies(
     clock: Res<SimClock>,
     settings: Res<StepSettings>,
-    solver: Res<SolverSettings>,
-    mut colliders: Query<(&Collider, Option<&mut Prop>)>,
+    mut colliders: Query<(&mut Collider, Option<&mut Prop>)>,
     rigid: Option<ResMut<PropWorld>>,
     mut cloths: Query<(
         &Cloth,
@@ -40,16 +40,20 @@ pub fn collide_with_bodies(
     if colliders.is_empty() {
         return;
     }
+    let mut rigid = rigid;
+    if let Some(rigid) = &mut rigid {
+        for (mut collider, prop) in &mut colliders {
+            if let Some(prop) = prop {
+                let body = &mut rigid.0.bodies[prop.body];
+                prop.coupling.settle(body, settings.dt);
+                collider.motion = ColliderMotion::Driven(ColliderState::of_body(body));
+            }
+        }
+    }
     let t = clock.step_end(settings.dt);
-    let BodyBuffers { bodies, centres, output, total, inertia, scratch } = &mut *buffers;
+    let BodyBuffers { bodies, output, total, scratch } = &mut *buffers;
     total.clear();
     total.resize(colliders.iter().len(), BodyLoad::default());
-    inertia.clear();
-    inertia.resize(total.len(), ApparentInertia::default());
-    centres.clear();
-    if let Some(rigid) = &rigid {
-        centres.extend(colliders.iter().map(|(_, prop)| prop.map(|prop| rigid.0.bodies[prop.body].center_of_mass())));
-    }
     for (cloth, material, mut particles, triangles, topology, workspace, mut stats, mut touching) in &mut cloths {
         bodies.clear();
         bodies.extend(colliders.iter().map(|(c, prop)| ContactBody {
@@ -86,8 +90,7 @@ pub fn collide_with_bodies(
             free_inv_mass: &topology.free_inv_mass,
             start: &workspace.step_start,
         };
-        // A prop's edges are left to its vertex contacts: pushes given outside the coupling's
-        // apparent inertia threw a box off the hammock (ARCHITECTURE.md).
+        // A prop's edges are left to its vertex contacts for now (ARCHITECTURE.md).
         for ((collider, prop), body) in colliders.iter().zip(bodies.iter()) {
             let (Some(features), None) = (&collider.features, prop) else {
                 continue;
@@ -96,29 +99,16 @@ pub fn collide_with_bodies(
                 features.resolve(&body.state, body.thickness, settings.dt, surface, position, velocity, scratch);
             stats.0.add(&pushes);
         }
-        if rigid.is_some() {
-            let matrix = workspace.integrator.implicit.system();
-            let system = (solver.integrator.is_implicit() && matrix.blocks.len() == topology.pattern.columns.len())
-                .then_some(StepSystem { pattern: &topology.pattern, matrix });
-            add_apparent_inertia(&touching.0, system, inv_mass, position, centres, inertia);
-        }
     }
     let Some(mut rigid) = rigid else {
         return;
     };
-    for (((_, prop), load), inertia) in colliders.iter_mut().zip(total.iter()).zip(inertia.iter()) {
-        let Some(mut prop) = prop else {
+    for ((_, prop), load) in colliders.iter_mut().zip(total.iter()) {
+        let Some(prop) = prop else {
             continue;
         };
         let body = &mut rigid.0.bodies[prop.body];
-        let properties = body.mass_properties();
-        let (dv, dw) = prop.coupling.velocity_change(
-            load.impulse,
-            load.moment_about(properties.world_com),
-            properties.effective_inv_mass,
-            properties.effective_world_inv_inertia.mul_mat(Mat3::IDENTITY),
-            inertia,
-        );
+        let (dv, dw) = prop.coupling.velocity_change(-load.impulse, -load.moment_about(body.center_of_mass()));
         if dv != Vec3::ZERO || dw != Vec3::ZERO {
             let (linear, angular) = (body.linvel() + dv, body.angvel() + dw);
             body.set_linvel(linear, true);
@@ -132,15 +122,10 @@ pub fn collide_with_bodies(
 pub struct BodyBuffers {
     /// The colliders as the contact kernel sees them.
     bodies: Vec<ContactBody>,
-    /// With props, the free bodies' centres of mass, about which their apparent inertia
-    /// is taken.
-    centres: Vec<Option<Vec3>>,
     /// One cloth's contact results.
     output: BodyContactOutput,
     /// Every cloth's push on each body.
     total: Vec<BodyLoad>,
-    /// The cloths' apparent inertia on each body.
-    inertia: Vec<ApparentInertia>,
     /// Buffers of the sharp features' contacts.
     scratch: FeatureScratch,
 }

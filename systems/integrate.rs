@@ -4,12 +4,13 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 
 use super::forces::{ForceElements, ForceEnvironment};
-use crate::components::{Cloth, Particles, SolverWorkspace, Touching};
+use crate::collision::coupling::PropCoupling;
+use crate::components::{Cloth, Collider, Particles, Prop, SolverWorkspace, Touching};
 use crate::resources::{HealthProblem, HealthReport, IntegratorStats, SolverSettings, StepSettings};
 use crate::schedule::{SimSchedules, SubstepSystems};
 use crate::solver::cfl::cfl_step;
 use crate::solver::forces::ClothDynamics;
-use crate::solver::implicit::VelocityConstraint;
+use crate::solver::implicit::ConstraintBodies;
 use crate::solver::integrate::{Dynamics, StepReport, step};
 
 /// Integrates each cloth from the forces of [`SubstepSystems::Forces`], re-evaluating the
@@ -23,21 +24,25 @@ pub fn integrate_cloths(
     mut stats: ResMut<IntegratorStats>,
     mut health: ResMut<HealthReport>,
     mut cloths: Query<(&Cloth, &mut Particles, ForceElements, &Touching, &mut SolverWorkspace)>,
+    mut colliders: Query<(&Collider, Option<&mut Prop>)>,
+    mut props: Local<PropCoupling>,
 ) {
-    for (cloth, mut particles, elements, touching, mut workspace) in &mut cloths {
+    for (index, (cloth, mut particles, elements, touching, mut workspace)) in cloths.iter_mut().enumerate() {
         let SolverWorkspace { integrator, forces, support, constraints, .. } = &mut *workspace;
         // Particles the last step left on a body stay on it while the forces press them
         // into it (closing what gap the last step left), held fast where static friction
-        // held them; those pulled away are let go.
+        // held them; those pulled away are let go. On a free prop they follow the prop,
+        // whose velocity the step solves for too.
+        props.begin(index, colliders.iter().map(|(_, prop)| prop.map(|p| p.coupling)));
         constraints.clear();
-        constraints.extend(touching.0.iter().filter(|t| particles.force[t.particle as usize].dot(t.normal) < 0.0).map(
-            |t| VelocityConstraint {
-                particle: t.particle,
-                normal: t.normal,
-                velocity: t.surface_velocity - t.gap / settings.dt * t.normal,
-                stick: t.sticking,
-            },
-        ));
+        constraints.extend(
+            touching
+                .0
+                .iter()
+                .filter(|t| particles.force[t.particle as usize].dot(t.normal) < 0.0)
+                .map(|t| props.constrain(t, particles.position[t.particle as usize], settings.dt)),
+        );
+        let coupled = solver.integrator.is_implicit() && props.has_free_bodies();
         integrator.resize(particles.len());
         for ((a, f), w) in integrator.start_acceleration.iter_mut().zip(&particles.force).zip(&elements.5.free_inv_mass)
         {
@@ -62,18 +67,29 @@ pub fn integrate_cloths(
             if split > 0 {
                 dynamics.acceleration(&x, &v, t, &mut integrator.start_acceleration);
             }
-            result =
-                step(solver.integrator, &mut dynamics, constraints, &mut x, &mut v, t, h, &solver.method, integrator)
-                    .map(|report| {
-                        let total = result.unwrap_or_default();
-                        StepReport {
-                            accepted: total.accepted + report.accepted,
-                            rejected: total.rejected + report.rejected,
-                            evaluations: total.evaluations + report.evaluations + u32::from(split > 0),
-                            iterations: total.iterations + report.iterations,
-                            max_error_ratio: total.max_error_ratio.max(report.max_error_ratio),
-                        }
-                    });
+            let bodies = coupled.then_some(&mut *props as &mut dyn ConstraintBodies);
+            result = step(
+                solver.integrator,
+                &mut dynamics,
+                constraints,
+                bodies,
+                &mut x,
+                &mut v,
+                t,
+                h,
+                &solver.method,
+                integrator,
+            )
+            .map(|report| {
+                let total = result.unwrap_or_default();
+                StepReport {
+                    accepted: total.accepted + report.accepted,
+                    rejected: total.rejected + report.rejected,
+                    evaluations: total.evaluations + report.evaluations + u32::from(split > 0),
+                    iterations: total.iterations + report.iterations,
+                    max_error_ratio: total.max_error_ratio.max(report.max_error_ratio),
+                }
+            });
             if result.is_err() {
                 break;
             }
@@ -85,6 +101,16 @@ pub fn integrate_cloths(
         if solver.integrator.is_implicit() {
             for (c, impulse) in constraints.iter().zip(&integrator.implicit.constraint_impulses) {
                 support[c.particle as usize] += *impulse;
+            }
+        }
+        if coupled {
+            // The props took the opposite of the support: the next cloth steps against them
+            // as they are now.
+            let impulses = &integrator.implicit.constraint_impulses;
+            for (b, (_, prop)) in colliders.iter_mut().enumerate() {
+                if let (Some(mut prop), Some(state)) = (prop, props.settled(b, impulses)) {
+                    prop.coupling = state;
+                }
             }
         }
         match result {

@@ -1,13 +1,13 @@
 //! Rigid props (E5): the rapier3d world advances by each cloth step, before the cloth, and
 //! the props' colliders take the bodies' new states; cloth contact then pushes the bodies
-//! back (see [`super::contacts::collide_with_bodies`]). The coupling is staggered, a prop
-//! feeling the cloth's push of one step in its motion of the next, and stabilised by the
-//! cloth's apparent inertia (see [`crate::collision::coupling`]).
+//! back. A prop's velocity is an unknown of the cloth's implicit step, which holds the
+//! particles resting on it (see [`crate::collision::coupling`]); the contacts after the
+//! step push it by what they give the cloth (see [`super::contacts::collide_with_bodies`]).
 
 use bevy_ecs::prelude::*;
-use glam::Vec3;
 
 use crate::collision::collider::{ColliderMotion, ColliderState};
+use crate::collision::coupling::BodyCoupling;
 use crate::components::{Collider, Prop, RigidStandIn};
 use crate::resources::{Gravity, PropWorld, SimClock, StepSettings};
 use crate::schedule::{SimSchedules, SubstepSystems};
@@ -22,7 +22,6 @@ pub fn step_props(
     rigid: Option<ResMut<PropWorld>>,
     stand_ins: Query<(&Collider, &RigidStandIn), Without<Prop>>,
     mut props: Query<(&mut Collider, &mut Prop)>,
-    mut before: Local<Vec<(Vec3, Vec3)>>,
 ) {
     let Some(mut rigid) = rigid else {
         return;
@@ -34,15 +33,13 @@ pub fn step_props(
             rigid.bodies[stand_in.body].set_next_kinematic_position(collider.motion.state_at(t).pose);
         }
     }
-    before.clear();
-    before.extend(props.iter().map(|(_, prop)| (rigid.bodies[prop.body].linvel(), rigid.bodies[prop.body].angvel())));
     rigid.gravity = gravity.0;
     rigid.integration_parameters.dt = settings.dt;
     rigid.step();
-    for ((mut collider, mut prop), (linear, angular)) in props.iter_mut().zip(before.iter()) {
+    for (mut collider, mut prop) in &mut props {
         let body = &rigid.bodies[prop.body];
         collider.motion = ColliderMotion::Driven(ColliderState::of_body(body));
-        prop.coupling.rigid_change = (body.linvel() - *linear, body.angvel() - *angular);
+        prop.coupling = BodyCoupling::of_body(body);
     }
 }
 

@@ -30,12 +30,14 @@ pub struct ContactBody {
     pub thickness: f32,
     /// What touching it does.
     pub response: ContactResponse,
-    /// Whether it is a prop, moved by the cloth's push through the staggered coupling of
-    /// [`super::coupling`]. Cloth touches a prop by the plain response only: no
-    /// [`TOUCH_SLACK`], no friction from the constraint's push, no static hold. The
-    /// coupling's balance takes the cloth's push along the contact normals as that
-    /// response gives it; a ball held by stuck cloth was thrown at 60 m/s, and with the
-    /// rest the ball on the hammock rolled to and fro.
+    /// Whether it is a prop, moved by the cloth's push: the implicit step's support through
+    /// the strong coupling of [`super::coupling`], which it does not get here again, and
+    /// the impulses given here. Cloth stays touching a prop within the [`TOUCH_SLACK`], as
+    /// any body (without it a box resting on a hammock kept the cloth under one side of it
+    /// at a time and rocked from side to side every step), but gets the plain response
+    /// otherwise: no friction from the constraint's push, no static hold. Those were left
+    /// out under the staggered coupling before it (a ball held by stuck cloth was thrown at
+    /// 60 m/s) and have not been tried with the strong one.
     pub prop: bool,
 }
 
@@ -166,7 +168,8 @@ struct Particle<'p> {
 /// next implicit step to keep them there; `support` is the impulse such a step's
 /// constraints gave each particle [N·s] (zero for explicit steps), which counts as contact
 /// force, given to the body the particle touched at the end of the last step (`touching`
-/// as it comes in). `output.loads` receives, per body, what the cloth pushed it with.
+/// as it comes in) unless that is a prop, which took it within the step.
+/// `output.loads` receives, per body, what the cloth pushed it with here.
 ///
 /// A particle that moved further than the contact thickness in the step is first traced
 /// along its path (a ray from `start`): if the path enters a body, the particle is put
@@ -201,7 +204,9 @@ pub fn resolve_body_contacts(
             let held_on = (support[i] != Vec3::ZERO)
                 .then(|| previous.binary_search_by_key(&(i as u32), |t| t.particle).ok().map(|k| previous[k]))
                 .flatten();
-            if let Some(touch) = held_on {
+            // A prop took its support within the step (strong coupling): only a fixed or
+            // keyframed body is pushed by it here.
+            if let Some(touch) = held_on.filter(|t| !bodies.get(t.body as usize).is_some_and(|b| b.prop)) {
                 outcome.pushes[0] = Some((touch.body, support[i]));
             }
             let held = held_on.filter(|t| t.sticking).map(|t| t.body);
@@ -305,9 +310,9 @@ fn locate(body: &ContactBody, h: f32, start: Vec3, x: &mut Vec3) -> Option<Proxi
     let offset = *x - projection.point;
     let distance = offset.length();
     let signed = if projection.is_inside { -distance } else { distance };
-    let slack = match (body.prop, body.response) {
-        (false, ContactResponse::Slide | ContactResponse::Stick) => TOUCH_SLACK * body.thickness,
-        _ => 0.0,
+    let slack = match body.response {
+        ContactResponse::Slide | ContactResponse::Stick => TOUCH_SLACK * body.thickness,
+        ContactResponse::Regimes(_) => 0.0,
     };
     if signed >= body.thickness + slack + body.response.reach() {
         return None;

@@ -164,6 +164,30 @@ pub struct VelocityConstraint {
     pub stick: bool,
 }
 
+/// Bodies whose velocities are unknowns of the step, such as free rigid props: the
+/// constraints holding particles on them prescribe the bodies' velocities, and the bodies'
+/// velocities depend on the impulses those constraints need. [`implicit_step`] solves
+/// again, with the velocities [`ConstraintBodies::rebalance`] asks for, until it asks for
+/// no change, so the cloth and the bodies end the step in balance (strong coupling).
+pub trait ConstraintBodies {
+    /// Given the impulses [N·s] the `constraints` needed in a solve with `system`, moves
+    /// their prescribed velocities towards the bodies' balance; returns false, changing
+    /// nothing, once they are within tolerance of it.
+    fn rebalance(&mut self, system: StepSystem<'_>, constraints: &mut [VelocityConstraint], impulses: &[Vec3]) -> bool;
+}
+
+/// The most solves a step makes for its [`ConstraintBodies`] after the first.
+const MAX_BODY_ITERATIONS: usize = 12;
+
+/// A step's implicit system.
+#[derive(Clone, Copy)]
+pub struct StepSystem<'a> {
+    /// Which blocks exist.
+    pub pattern: &'a BlockPattern,
+    /// `A = (1 + hα) M − h ∂f/∂v − (hβ + h²θ²) ∂f/∂x`.
+    pub matrix: &'a BlockMatrix,
+}
+
 /// Relative size of a Newton correction below which the step counts as converged.
 const NEWTON_TOLERANCE: f64 = 1e-5;
 
@@ -172,7 +196,8 @@ const NEWTON_TOLERANCE: f64 = 1e-5;
 pub fn implicit_step(
     settings: &ImplicitSettings,
     dynamics: &mut impl LinearDynamics,
-    constraints: &[VelocityConstraint],
+    constraints: &mut [VelocityConstraint],
+    bodies: Option<&mut dyn ConstraintBodies>,
     x: &mut [Vec3],
     v: &mut [Vec3],
     t: f32,
@@ -197,18 +222,12 @@ pub fn implicit_step(
     }
     ws.filter.clear();
     ws.filter.extend((0..n).map(|i| if dynamics.is_free(i) { Mat3::IDENTITY } else { Mat3::ZERO }));
-    ws.prescribed.clear();
-    ws.prescribed.resize(n, Vec3::ZERO);
-    for c in constraints {
+    for c in constraints.iter() {
         let i = c.particle as usize;
         let projection = if c.stick { Mat3::ZERO } else { Mat3::IDENTITY - outer(c.normal, c.normal) };
         ws.filter[i] = projection * ws.filter[i];
-        if dynamics.is_free(i) {
-            let current = v[i] + ws.prescribed[i];
-            ws.prescribed[i] +=
-                if c.stick { c.velocity - current } else { (c.velocity - current).dot(c.normal) * c.normal };
-        }
     }
+    prescribe(dynamics, constraints, v, &mut ws.prescribed);
     let (theta, Rayleigh { alpha, beta }) = (settings.theta, settings.rayleigh);
     let mut report = StepReport { accepted: 1, ..StepReport::default() };
 
@@ -221,11 +240,31 @@ pub fn implicit_step(
         ws.rhs[i] = h * ws.start_force[i] + h * h * theta * ws.product[i];
     }
     build_system(settings, h, dynamics, ws);
-    report.iterations += solve(dynamics, settings, true, x, ws);
-    ws.dv.copy_from_slice(&ws.delta);
+    report.iterations += solve(dynamics, settings, Start::Prescribed, x, ws);
     ws.constraint_impulses.clear();
     ws.constraint_impulses.resize(constraints.len(), Vec3::ZERO);
     add_constraint_impulses(dynamics.pattern(), constraints, ws);
+    // Bodies moved by the constraints' impulses: solve again, from the last solution, with
+    // the velocities their balance asks for, until they settle.
+    if let Some(bodies) = bodies {
+        for _ in 0..MAX_BODY_ITERATIONS {
+            let system = StepSystem { pattern: dynamics.pattern(), matrix: &ws.system };
+            if !bodies.rebalance(system, constraints, &ws.constraint_impulses) {
+                break;
+            }
+            for (delta, prescribed) in ws.delta.iter_mut().zip(&ws.prescribed) {
+                *delta -= *prescribed;
+            }
+            prescribe(dynamics, constraints, v, &mut ws.prescribed);
+            for (delta, prescribed) in ws.delta.iter_mut().zip(&ws.prescribed) {
+                *delta += *prescribed;
+            }
+            report.iterations += solve(dynamics, settings, Start::Given, x, ws);
+            ws.constraint_impulses.fill(Vec3::ZERO);
+            add_constraint_impulses(dynamics.pattern(), constraints, ws);
+        }
+    }
+    ws.dv.copy_from_slice(&ws.delta);
 
     for _ in 1..settings.newton_iterations {
         for i in 0..n {
@@ -248,7 +287,7 @@ pub fn implicit_step(
                 h * ((1.0 - theta) * (ws.start_force[i] + damping_change) + theta * end_force) - mass * ws.dv[i];
         }
         build_system(settings, h, dynamics, ws);
-        report.iterations += solve(dynamics, settings, false, x, ws);
+        report.iterations += solve(dynamics, settings, Start::Zero, x, ws);
         add_constraint_impulses(dynamics.pattern(), constraints, ws);
         for i in 0..n {
             ws.dv[i] += ws.delta[i];
@@ -295,23 +334,54 @@ fn add_constraint_impulses(pattern: &BlockPattern, constraints: &[VelocityConstr
     }
 }
 
-/// Solves `system · delta = rhs` within the filters with the settings' linear solver:
-/// from the prescribed part when `prescribe` (the first Newton iteration), else from
-/// zero. Returns the iterations (or sweeps) taken.
+/// Sets `prescribed` to the part of each particle's Δv that the `constraints` fix: the
+/// change to the constraint's velocity along its normal, or whole where it sticks.
+fn prescribe(
+    dynamics: &impl LinearDynamics,
+    constraints: &[VelocityConstraint],
+    v: &[Vec3],
+    prescribed: &mut Vec<Vec3>,
+) {
+    prescribed.clear();
+    prescribed.resize(v.len(), Vec3::ZERO);
+    for c in constraints {
+        let i = c.particle as usize;
+        if dynamics.is_free(i) {
+            let current = v[i] + prescribed[i];
+            prescribed[i] +=
+                if c.stick { c.velocity - current } else { (c.velocity - current).dot(c.normal) * c.normal };
+        }
+    }
+}
+
+/// Where a linear solve starts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Start {
+    /// From the prescribed part alone (the first Newton iteration).
+    Prescribed,
+    /// From zero (a Newton correction).
+    Zero,
+    /// From `delta` as it is: this step's last solution, its prescribed part changed.
+    Given,
+}
+
+/// Solves `system · delta = rhs` within the filters with the settings' linear solver, from
+/// `start`. Returns the iterations (or sweeps) taken.
 fn solve(
     dynamics: &impl LinearDynamics,
     settings: &ImplicitSettings,
-    prescribe: bool,
+    start: Start,
     x: &[Vec3],
     ws: &mut ImplicitWorkspace,
 ) -> u32 {
     // Both solvers start from rest (Δv = 0: the inertial step), never from the last step's
     // Δv: what a few descent sweeps leave of that guess in the stiff modes is an explicit
-    // step, and a hanging sheet diverged within ten frames.
-    if prescribe {
-        ws.delta.copy_from_slice(&ws.prescribed);
-    } else {
-        ws.delta.fill(Vec3::ZERO);
+    // step, and a hanging sheet diverged within ten frames. Within a step, a solve for
+    // other body velocities starts from the last solution of the same system.
+    match start {
+        Start::Prescribed => ws.delta.copy_from_slice(&ws.prescribed),
+        Start::Zero => ws.delta.fill(Vec3::ZERO),
+        Start::Given => {}
     }
     let pattern = dynamics.pattern();
     match settings.linear_solver {

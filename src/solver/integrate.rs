@@ -14,7 +14,8 @@ use serde::{Deserialize, Serialize};
 use super::PARALLEL_MIN_LEN;
 use super::descent::DescentSettings;
 use super::implicit::{
-    ImplicitSettings, ImplicitWorkspace, LinearDynamics, LinearSolver, Rayleigh, VelocityConstraint, implicit_step,
+    ConstraintBodies, ImplicitSettings, ImplicitWorkspace, LinearDynamics, LinearSolver, Rayleigh, VelocityConstraint,
+    implicit_step,
 };
 
 /// The integration method of a scene (Durupınar D10, Zheng Z4).
@@ -240,12 +241,14 @@ const ERROR_FLOOR: f32 = 1e-6;
 
 /// Advances `(x, v)` from time `t` by `h` [s] with `method`. The caller has filled
 /// `ws.start_acceleration` with the acceleration at `(x, v, t)` (the implicit methods
-/// evaluate their own, and honour the contact `constraints`; explicit methods leave
-/// contacts to the contact stage).
+/// evaluate their own, and honour the contact `constraints`, solving with the `bodies`
+/// whose velocities the constraints follow; explicit methods leave contacts to the
+/// contact stage).
 pub fn step(
     method: Integrator,
     dynamics: &mut impl LinearDynamics,
-    constraints: &[VelocityConstraint],
+    constraints: &mut [VelocityConstraint],
+    bodies: Option<&mut dyn ConstraintBodies>,
     x: &mut [Vec3],
     v: &mut [Vec3],
     t: f32,
@@ -258,7 +261,7 @@ pub fn step(
     match method {
         Integrator::ImplicitEuler => {
             let euler = ImplicitSettings { theta: 1.0, ..settings.implicit };
-            Ok(implicit_step(&euler, dynamics, constraints, x, v, t, h, &mut ws.implicit))
+            Ok(implicit_step(&euler, dynamics, constraints, bodies, x, v, t, h, &mut ws.implicit))
         }
         Integrator::BlockDescent => {
             let descent = ImplicitSettings {
@@ -266,10 +269,10 @@ pub fn step(
                 linear_solver: LinearSolver::BlockDescent(settings.descent),
                 ..settings.implicit
             };
-            Ok(implicit_step(&descent, dynamics, constraints, x, v, t, h, &mut ws.implicit))
+            Ok(implicit_step(&descent, dynamics, constraints, bodies, x, v, t, h, &mut ws.implicit))
         }
         Integrator::Newmark => {
-            Ok(implicit_step(&settings.implicit, dynamics, constraints, x, v, t, h, &mut ws.implicit))
+            Ok(implicit_step(&settings.implicit, dynamics, constraints, bodies, x, v, t, h, &mut ws.implicit))
         }
         Integrator::ExplicitEuler => Ok(runge_kutta(&EULER, dynamics, x, v, t, h, ws)),
         Integrator::Midpoint => Ok(runge_kutta(&MIDPOINT, dynamics, x, v, t, h, ws)),

@@ -97,7 +97,7 @@ impl ParticleSystem {
             let mut a = vec![Vec3::ZERO; x.len()];
             selvedge::solver::integrate::Dynamics::acceleration(&mut dynamics, &x, &v, t, &mut a);
             ws.start_acceleration.copy_from_slice(&a);
-            let report = step(method, &mut dynamics, &[], &mut x, &mut v, t, h as f32, settings, &mut ws)
+            let report = step(method, &mut dynamics, &mut [], None, &mut x, &mut v, t, h as f32, settings, &mut ws)
                 .expect("a smooth problem");
             total.accepted += report.accepted;
             total.rejected += report.rejected;
