@@ -90,14 +90,14 @@ pub fn collide_with_bodies(
             free_inv_mass: &topology.free_inv_mass,
             start: &workspace.step_start,
         };
-        // A prop's edges are left to its vertex contacts for now (ARCHITECTURE.md).
-        for ((collider, prop), body) in colliders.iter().zip(bodies.iter()) {
-            let (Some(features), None) = (&collider.features, prop) else {
+        for (((collider, _), body), sum) in colliders.iter().zip(bodies.iter()).zip(total.iter_mut()) {
+            let Some(features) = &collider.features else {
                 continue;
             };
-            let pushes =
+            let (pushes, load) =
                 features.resolve(&body.state, body.thickness, settings.dt, surface, position, velocity, scratch);
             stats.0.add(&pushes);
+            sum.add(&load);
         }
     }
     let Some(mut rigid) = rigid else {

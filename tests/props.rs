@@ -48,32 +48,34 @@ fn a_light_ball_sinks_into_a_hammock_and_rests_there() {
 fn a_light_box_landing_tilted_on_a_stiff_hammock_rests_on_it() {
     // Coupled after the cloth's step, this box was thrown off within a second: the
     // hammock's apparent inertia is many times the box's (strong coupling, ARCHITECTURE.md).
+    // Without the box's edges meeting the cloth's, 22 cloth triangles crossed its rim.
     let mut sim = common::bundled("prop_box.ron");
     let weight = (0.2 * 1.0 * 0.6 + 0.15) * 9.81;
-    common::run_frames(&mut sim, 150);
-    let settled = prop_state(&mut sim);
+    let (frames, last) = (240, 60);
     let mut pins = 0.0;
-    for _ in 0..30 {
+    let mut places = Vec::new();
+    for frame in 0..frames {
         common::run_frames(&mut sim, 1);
-        pins += common::probe(&sim, "pin_force_n") / 30.0;
+        let crossed = common::body_crossings(&mut sim, "box");
+        assert_eq!(crossed, 0, "{crossed} cloth triangles cross the box's faces at frame {frame}");
         assert!(common::probe(&sim, "max_penetration_m") <= 0.002, "the box stays out of the cloth's thickness");
+        if frame >= frames - last {
+            pins += common::probe(&sim, "pin_force_n") / f64::from(last);
+            places.push(prop_state(&mut sim).pose);
+        }
     }
-    let end = prop_state(&mut sim);
     assert!((pins - weight).abs() < 0.005 * weight, "pins carry {pins} N, cloth and box weigh {weight} N");
-    assert!(
-        end.pose.translation.y - 0.05 < 0.95,
-        "the box sank into the hammock: its centre is at {} m",
-        end.pose.translation.y
-    );
-    let moved = (end.pose.translation - settled.pose.translation).length();
-    let turned = end.pose.rotation.angle_between(settled.pose.rotation);
-    assert!(
-        moved < 0.001 && turned < 0.01,
-        "and rests: it moved {moved} m and turned {turned} rad in the last half second"
-    );
-    // It came to rest on its 20 × 20 cm face, the face's normal within 10° of vertical
-    // (the hammock's sag tilts it a little, not the way it was dropped).
-    let up = end.pose.rotation * glam::Vec3::Y;
+    let end = places[places.len() - 1];
+    // It sank into the hammock, its bottom 5 cm below the pins (the ball, on a smaller
+    // patch, sinks further).
+    assert!(end.translation.y - 0.05 < 0.96, "the box's bottom is at {} m", end.translation.y - 0.05);
+    // At rest over the last second: within 2 mm and 0.02 rad of where it ends.
+    let strayed = places.iter().map(|p| (p.translation - end.translation).length()).fold(0.0, f32::max);
+    let turned = places.iter().map(|p| p.rotation.angle_between(end.rotation)).fold(0.0, f32::max);
+    assert!(strayed < 0.002 && turned < 0.02, "it strayed {strayed} m and turned {turned} rad in the last second");
+    // On its 20 × 20 cm face, the face's normal within 10° of vertical (the hammock's sag
+    // tilts it a little, not the way it was dropped).
+    let up = end.rotation * glam::Vec3::Y;
     assert!(up.y.abs() > 10f32.to_radians().cos(), "the box's face normal is {up}");
 }
 

@@ -30,7 +30,7 @@ use glam::{Quat, Vec3};
 use parry3d::shape::SharedShape;
 use rayon::prelude::*;
 
-use super::body_contact::ContactTotals;
+use super::body_contact::{BodyLoad, ContactTotals};
 use super::bvh::{Aabb, Bvh};
 use super::collider::ColliderState;
 use super::primitives::{Sweep, closest_between_segments, closest_on_triangle};
@@ -196,7 +196,8 @@ impl SharpFeatures {
     /// corners at the end of a step of `h` [s] that took the cloth from `cloth.start` to
     /// `x`, with the body at `state` at the step's end; `thickness` is the distance kept
     /// [m]. Moves `x` and changes `v` by what the pushes changed the step's mean velocity,
-    /// and returns the pushes' impulses on the cloth as contact totals.
+    /// and returns the pushes' impulses on the cloth as contact totals and as the load
+    /// the body gave (which a prop takes back).
     pub fn resolve(
         &self,
         state: &ColliderState,
@@ -206,8 +207,9 @@ impl SharpFeatures {
         x: &mut [Vec3],
         v: &mut [Vec3],
         scratch: &mut FeatureScratch,
-    ) -> ContactTotals {
+    ) -> (ContactTotals, BodyLoad) {
         let mut totals = ContactTotals::default();
+        let mut load = BodyLoad::default();
         let pose = state.pose;
         cloth
             .start
@@ -246,6 +248,7 @@ impl SharpFeatures {
                     x[i] += moved;
                     v[i] += moved / h;
                     impulse += moved / (h * inv[k]);
+                    load.add(&BodyLoad::at(x[i], moved / (h * inv[k])));
                 }
                 totals.impulse += impulse;
                 totals.normal_impulse += impulse.length();
@@ -255,7 +258,7 @@ impl SharpFeatures {
                 break;
             }
         }
-        totals
+        (totals, load)
     }
 
     /// Lists the pairs whose boxes over the step, grown by the thickness, meet.
@@ -390,7 +393,8 @@ mod tests {
         let mut v = [fall / 0.01; 2];
         let thickness = 0.01;
         let cloth = ClothSurface { edges: &[[0, 1]], triangles: &[], free_inv_mass: &[1.0, 1.0], start: &start };
-        let totals = cube.resolve(&state, thickness, 0.01, cloth, &mut x, &mut v, &mut FeatureScratch::default());
+        let (totals, load) =
+            cube.resolve(&state, thickness, 0.01, cloth, &mut x, &mut v, &mut FeatureScratch::default());
         assert!(totals.impulse != Vec3::ZERO, "a push was given");
         let edge_line = |p: Vec3| Vec3::new(0.0, p.y - 0.5, p.z - 0.5);
         let middle = edge_line(x[0].lerp(x[1], 0.5));
@@ -399,6 +403,10 @@ mod tests {
         // The impulse reported is the momentum the pushes gave the cloth.
         let given: Vec3 = v.iter().map(|v| *v - fall / 0.01).sum();
         assert!((given - totals.impulse).length() < 1e-3 * given.length());
+        // The body's load is the same impulse, with its moment taken where it was given:
+        // both ends pushed alike, so about the edge's middle there is none.
+        assert!((load.impulse - totals.impulse).length() < 1e-6);
+        assert!(load.moment_about(x[0].lerp(x[1], 0.5)).length() < 1e-4 * given.length(), "{load:?}");
     }
 
     /// A cube moving up into a resting cloth triangle meets it with its top corner, which
