@@ -20,9 +20,9 @@
 //! still: the cloth's start positions are carried along by the body's motion over the
 //! step, as the vertex trace of [`super::body_contact`] does, so a moving box meets the
 //! cloth with its leading edges. These contacts are frictionless; the vertices' contacts
-//! on the faces give the friction. They serve static and keyframed colliders only: a
-//! prop would take these pushes outside the coupling's apparent inertia
-//! ([`super::coupling`]), and a box on a hammock was thrown off by them.
+//! on the faces give the friction. A prop takes the opposite of the pushes, after the
+//! step whose solve balanced it ([`super::coupling`]): a box resting on a hammock then
+//! keeps the cloth off its rim but jitters a little.
 
 use std::collections::BTreeMap;
 
