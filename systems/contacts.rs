@@ -24,7 +24,7 @@ pub fn collide_with_bodies(
     clock: Res<SimClock>,
     settings: Res<StepSettings>,
     mut colliders: Query<(&mut Collider, Option<&mut Prop>)>,
-    rigid: Option<ResMut<PropWorld>>,
+    mut rigid: Option<ResMut<PropWorld>>,
     mut cloths: Query<(
         &Cloth,
         &ClothMaterial,
@@ -40,7 +40,6 @@ pub fn collide_with_bodies(
     if colliders.is_empty() {
         return;
     }
-    let mut rigid = rigid;
     if let Some(rigid) = &mut rigid {
         for (mut collider, prop) in &mut colliders {
             if let Some(prop) = prop {

@@ -25,7 +25,7 @@
 use glam::{Mat3, Quat, Vec3};
 
 use super::body_contact::Touch;
-use crate::solver::elements::spring::outer;
+use crate::solver::elements::spring::{outer, skew};
 use crate::solver::implicit::{ConstraintBodies, StepSystem, VelocityConstraint};
 
 /// A free body as the cloth's steps see it: its state after the rigid world's step, with
@@ -137,7 +137,10 @@ impl PropCoupling {
             self.learned.clear();
         }
         self.cloth = cloth;
-        self.learned.resize((cloth + 1).max(self.learned.len() / bodies.len().max(1)) * bodies.len(), None);
+        let needed = (cloth + 1) * bodies.len();
+        if self.learned.len() < needed {
+            self.learned.resize(needed, None);
+        }
         self.bodies.clear();
         self.bodies.extend(bodies.map(|state| CoupledBody {
             free: state.is_some(),
@@ -209,7 +212,6 @@ impl PropCoupling {
         constraints: &[VelocityConstraint],
     ) -> Matrix6 {
         let body = &self.bodies[b];
-        let skew = |r: Vec3| Mat3::from_cols(r.cross(Vec3::X), r.cross(Vec3::Y), r.cross(Vec3::Z));
         let directions = |c: &VelocityConstraint| if c.stick { Mat3::IDENTITY } else { outer(c.normal, c.normal) };
         // D = Σ Gᵢᵀ Pᵢ Aᵢⱼ Pⱼ Gⱼ, Gₖ = (1, −[rₖ]×), in blocks (translation, coupling, rotation).
         let (mut t, mut c, mut r) = (Mat3::ZERO, Mat3::ZERO, Mat3::ZERO);

@@ -139,13 +139,6 @@ pub struct ImplicitWorkspace {
     pub constraint_impulses: Vec<Vec3>,
 }
 
-impl ImplicitWorkspace {
-    /// The system matrix `A` of the last Newton iteration (empty before the first step).
-    pub fn system(&self) -> &BlockMatrix {
-        &self.system
-    }
-}
-
 /// A particle touching a body: in the implicit solve its velocity along `normal` is set to
 /// the body's (`velocity`), the rest left to the solve, or, where static friction holds
 /// it (`stick`), its whole velocity — Baraff & Witkin's constraint by filtering, so that

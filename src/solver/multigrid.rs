@@ -43,7 +43,7 @@ use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
 use super::PARALLEL_MIN_LEN;
-use super::elements::spring::outer;
+use super::elements::spring::{outer, skew};
 use super::elements::{BlockMatrix, BlockPattern};
 use crate::components::Csr;
 
@@ -482,11 +482,6 @@ impl Rigid<'_> {
             (true, true) => self.points.frame.map_or(Mat3::ZERO, |own| own[point].transpose() * frame),
         })
     }
-}
-
-/// The matrix of `r ×`.
-fn skew(r: Vec3) -> Mat3 {
-    Mat3::from_cols(Vec3::new(0.0, r.z, -r.y), Vec3::new(-r.z, 0.0, r.x), Vec3::new(r.y, -r.x, 0.0))
 }
 
 /// The eigenvectors (as columns) and eigenvalues of a symmetric matrix, by cyclic Jacobi

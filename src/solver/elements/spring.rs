@@ -72,6 +72,12 @@ pub fn outer(a: Vec3, b: Vec3) -> Mat3 {
     Mat3::from_cols(a * b.x, a * b.y, a * b.z)
 }
 
+/// The matrix of `r ×`: `skew(r) u = r × u`.
+#[inline]
+pub fn skew(r: Vec3) -> Mat3 {
+    Mat3::from_cols(Vec3::new(0.0, r.z, -r.y), Vec3::new(-r.z, 0.0, r.x), Vec3::new(r.y, -r.x, 0.0))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
