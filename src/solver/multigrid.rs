@@ -552,13 +552,47 @@ impl Operator<'_> {
     }
 }
 
-/// Sets the blocks of every slot of `pattern` to `block(row, column)`, in parallel.
-fn fill_blocks(pattern: &BlockPattern, blocks: &mut Vec<Mat3>, block: impl Fn(usize, u32) -> Mat3 + Sync) {
-    (0..pattern.columns.len())
-        .into_par_iter()
-        .with_min_len(PARALLEL_MIN_LEN)
-        .map(|slot| block(pattern.row_of(slot), pattern.columns[slot]))
-        .collect_into_vec(blocks);
+/// Zeroes the blocks of `pattern` and lets `row(i, columns, blocks)` fill each row `i`
+/// (its sorted `columns` and their `blocks`), rows in parallel. Row by row, a product of
+/// sparse matrices walks its operands' rows once (Gustavson's order) instead of searching
+/// for each block of the result; each block still sums its terms in one fixed order.
+fn fill_rows(pattern: &BlockPattern, blocks: &mut Vec<Mat3>, row: impl Fn(usize, &[u32], &mut [Mat3]) + Sync) {
+    blocks.clear();
+    blocks.resize(pattern.columns.len(), Mat3::ZERO);
+    fill_row_range(pattern, 0..pattern.rows(), blocks, &row);
+}
+
+/// [`fill_rows`] over `rows`, whose blocks are `blocks`: halves in parallel down to
+/// [`PARALLEL_MIN_LEN`] blocks.
+fn fill_row_range(
+    pattern: &BlockPattern,
+    rows: std::ops::Range<usize>,
+    blocks: &mut [Mat3],
+    row: &(impl Fn(usize, &[u32], &mut [Mat3]) + Sync),
+) {
+    let first = pattern.offsets[rows.start] as usize;
+    if blocks.len() <= PARALLEL_MIN_LEN || rows.len() < 2 {
+        for i in rows {
+            let slots = pattern.slots(i);
+            row(i, &pattern.columns[slots.clone()], &mut blocks[slots.start - first..slots.end - first]);
+        }
+        return;
+    }
+    let middle = rows.start + rows.len() / 2;
+    let (left, right) = blocks.split_at_mut(pattern.offsets[middle] as usize - first);
+    rayon::join(
+        || fill_row_range(pattern, rows.start..middle, left, row),
+        || fill_row_range(pattern, middle..rows.end, right, row),
+    );
+}
+
+/// Adds `block` to the block of `row` (sorted columns, with their `blocks`) in `column`,
+/// searching forward from `*at`, where the last search of an ascending walk ended.
+fn add_at(row: &[u32], blocks: &mut [Mat3], at: &mut usize, column: u32, block: Mat3) {
+    while row[*at] != column {
+        *at += 1;
+    }
+    blocks[*at] += block;
 }
 
 /// A fixed, irregular block for index `i`, each component in [−0.5, 0.5] (Knuth's
@@ -659,42 +693,45 @@ impl Level {
             }
             sum
         };
-        fill_blocks(&coarsening.prolongation, &mut prolongation.blocks, |i, coarse| {
-            let mut smoothed = inverse.own[i] * pushed(i, coarse);
-            if let Some(partner) = inverse.partner.get(i) {
-                smoothed += *partner * pushed(i ^ 1, coarse);
+        fill_rows(&coarsening.prolongation, &mut prolongation.blocks, |i, columns, blocks| {
+            for (&coarse, out) in columns.iter().zip(blocks) {
+                let mut smoothed = inverse.own[i] * pushed(i, coarse);
+                if let Some(partner) = inverse.partner.get(i) {
+                    smoothed += *partner * pushed(i ^ 1, coarse);
+                }
+                let own = rigid.block(i, coarse).map_or(Mat3::ZERO, |block| a.filter(i) * block);
+                *out = own - weight * smoothed;
             }
-            let own = rigid.block(i, coarse).map_or(Mat3::ZERO, |block| a.filter(i) * block);
-            own - weight * smoothed
         });
     }
 
-    /// `A S P` over the product pattern.
+    /// `A S P` over the product pattern: row `i` is `Σ_k A_ik (S P)_k`, the rows of `S P`
+    /// at the columns of `A`'s row, each added into the result's row by one forward walk.
     fn product(&mut self, a: Operator, coarsening: &Coarsening) {
         let (p, prolongation) = (&coarsening.prolongation, &self.prolongation);
-        fill_blocks(&coarsening.product, &mut self.product.blocks, |i, coarse| {
-            let mut sum = Mat3::ZERO;
+        fill_rows(&coarsening.product, &mut self.product.blocks, |i, columns, blocks| {
             for k in a.pattern.slots(i) {
-                if let Some(s) = p.slot(a.pattern.columns[k], coarse) {
-                    sum += a.matrix.blocks[k] * prolongation.blocks[s as usize];
+                let (block, node) = (a.matrix.blocks[k], a.pattern.columns[k] as usize);
+                let mut at = 0;
+                for s in p.slots(node) {
+                    add_at(columns, blocks, &mut at, p.columns[s], block * prolongation.blocks[s]);
                 }
             }
-            sum
         });
     }
 
-    /// The coarser level's matrix `(S P)ᵀ A S P`.
+    /// The coarser level's matrix `(S P)ᵀ A S P`: row `R` is `Σ_r (S P)_rRᵀ (A S P)_r`
+    /// over the rows `r` of column `R` of `S P`.
     fn galerkin(&self, coarsening: &Coarsening, out: &mut BlockMatrix) {
         let Coarsening { restriction, restriction_rows, product: ap, coarse, .. } = coarsening;
-        fill_blocks(coarse, &mut out.blocks, |row, column| {
-            let mut sum = Mat3::ZERO;
+        fill_rows(coarse, &mut out.blocks, |row, columns, blocks| {
             for k in restriction.range(row) {
-                if let Some(t) = ap.slot(restriction_rows[k], column) {
-                    let s = restriction.items[k] as usize;
-                    sum += self.prolongation.blocks[s].transpose() * self.product.blocks[t as usize];
+                let transposed = self.prolongation.blocks[restriction.items[k] as usize].transpose();
+                let mut at = 0;
+                for t in ap.slots(restriction_rows[k] as usize) {
+                    add_at(columns, blocks, &mut at, ap.columns[t], transposed * self.product.blocks[t]);
                 }
             }
-            sum
         });
     }
 
