@@ -187,17 +187,24 @@ impl VelocityJacobian {
         }
     }
 
-    /// `out = a · self − b · other` over `other`'s pattern, slot by slot.
-    pub fn combine(&self, a: f32, other: &BlockMatrix, b: f32, pattern: &BlockPattern, out: &mut BlockMatrix) {
-        out.blocks.clear();
+    /// `matrix ← a · self − b · matrix` over `matrix`'s pattern, slot by slot, in place: the
+    /// implicit system takes over the storage of ∂f/∂x, which nothing reads once the
+    /// system is built, instead of a third matrix of the pattern.
+    pub fn combine_into(&self, a: f32, b: f32, pattern: &BlockPattern, matrix: &mut BlockMatrix) {
         if self.full {
-            out.blocks.extend(self.matrix.blocks.iter().zip(&other.blocks).map(|(d, k)| a * *d - b * *k));
+            for (k, d) in matrix.blocks.iter_mut().zip(&self.matrix.blocks) {
+                *k = a * *d - b * *k;
+            }
             return;
         }
-        out.blocks.extend(other.blocks.iter().map(|k| -(b * *k)));
+        for k in &mut matrix.blocks {
+            *k = -(b * *k);
+        }
         for (i, d) in self.matrix.blocks.iter().enumerate() {
             let slot = pattern.diagonal_slot(i);
-            out.blocks[slot] = a * *d - b * other.blocks[slot];
+            // Negation is exact, so this is `a d − b k` as the full case rounds it.
+            let stiffness = -matrix.blocks[slot];
+            matrix.blocks[slot] = a * *d - stiffness;
         }
     }
 }
@@ -248,9 +255,9 @@ mod tests {
         assert_eq!(a, b);
         assert_eq!(diagonal.block(&pattern, 1, 0), Mat3::ZERO);
         assert_eq!(diagonal.block(&pattern, 2, 2), full.block(&pattern, 2, 2));
-        let (mut a, mut b) = (BlockMatrix::default(), BlockMatrix::default());
-        diagonal.combine(-0.1, &stiffness, 0.3, &pattern, &mut a);
-        full.combine(-0.1, &stiffness, 0.3, &pattern, &mut b);
+        let (mut a, mut b) = (stiffness.clone(), stiffness.clone());
+        diagonal.combine_into(-0.1, 0.3, &pattern, &mut a);
+        full.combine_into(-0.1, 0.3, &pattern, &mut b);
         assert_eq!(a, b);
         assert_eq!(a.block(&pattern, 0, 0), Mat3::from_diagonal(Vec3::splat(0.05 - 0.3)));
     }
