@@ -11,6 +11,7 @@ use super::elements::{BlockMatrix, BlockPattern, SpringElement, VelocityJacobian
 use super::implicit::LinearDynamics;
 use super::integrate::Dynamics;
 use super::multigrid::Hierarchy;
+use super::pipeline::pipelined;
 use crate::components::{BendingHinges, ClothTopology, MembraneTriangles, Springs};
 
 /// Air around the cloth.
@@ -87,10 +88,9 @@ pub struct ForceScratch {
 const ELEMENT_CHUNK: usize = 256;
 
 /// Adds the `N × N` local blocks `local(e)` of every element `e` to `matrix` at
-/// `slots[e]`: each chunk's blocks are computed in parallel into one half of `buffer`,
-/// then added in element order while the next chunk is computed into the other half, so
-/// the additions (serial, for sums that are the same on any number of threads) overlap the
-/// element work.
+/// `slots[e]`: each chunk's blocks are computed in parallel, then added in element order
+/// while the next chunk is computed ([`pipelined`]), so the sums are the same on any
+/// number of threads and the additions overlap the element work.
 fn add_elements<const N: usize>(
     matrix: &mut BlockMatrix,
     slots: &[[[u32; N]; N]],
@@ -111,28 +111,15 @@ fn add_elements<const N: usize>(
             },
         );
     };
-    let (mut ready, mut next) = buffer.split_at_mut(half);
-    let chunks = slots.len().div_ceil(ELEMENT_CHUNK);
-    if chunks > 0 {
-        compute(0, ready);
-    }
-    for (chunk, chunk_slots) in slots.chunks(ELEMENT_CHUNK).enumerate() {
-        rayon::join(
-            || {
-                for (element_slots, element_blocks) in chunk_slots.iter().zip(ready.chunks(size)) {
-                    for (slot, block) in element_slots.iter().flatten().zip(element_blocks) {
-                        matrix.blocks[*slot as usize] += *block;
-                    }
-                }
-            },
-            || {
-                if chunk + 1 < chunks {
-                    compute(chunk + 1, next);
-                }
-            },
-        );
-        std::mem::swap(&mut ready, &mut next);
-    }
+    pipelined(slots.len().div_ceil(ELEMENT_CHUNK), buffer, half, compute, |chunk, blocks| {
+        let first = chunk * ELEMENT_CHUNK;
+        let chunk_slots = &slots[first..slots.len().min(first + ELEMENT_CHUNK)];
+        for (element_slots, element_blocks) in chunk_slots.iter().zip(blocks.chunks(size)) {
+            for (slot, block) in element_slots.iter().flatten().zip(element_blocks) {
+                matrix.blocks[*slot as usize] += *block;
+            }
+        }
+    });
 }
 
 /// Everything that exerts force on one cloth, borrowed for one evaluation.

@@ -13,6 +13,7 @@ pub mod integrate;
 pub mod multigrid;
 pub mod ordering;
 pub mod pins;
+pub mod pipeline;
 pub mod probes;
 pub mod strain_limit;
 

@@ -45,6 +45,7 @@ use rayon::prelude::*;
 use super::PARALLEL_MIN_LEN;
 use super::elements::spring::{outer, skew};
 use super::elements::{BlockMatrix, BlockPattern};
+use super::pipeline::pipelined;
 use crate::components::Csr;
 
 /// Levels stop coarsening at this many nodes; the coarsest system is then factored
@@ -92,6 +93,11 @@ const JACOBI_SWEEPS: usize = 6;
 /// Degree of the Chebyshev smoother (products with the level's matrix per smoothing)
 /// before and after each coarse correction.
 const SMOOTHING_SWEEPS: usize = 2;
+
+/// Fine rows of `A S P` formed at a time for the Galerkin product. Formed whole, `A S P`
+/// was the largest array of the levels (1.7 MB, 420 bytes a particle, on the 64² hang
+/// scene); two chunks of 512 rows are some 0.4 MB.
+const PRODUCT_ROWS: usize = 512;
 
 /// The coarse levels are rebuilt once a solve takes more than this many times the
 /// iterations of the first solve after they were built (plus [`REBUILD_SLACK`]).
@@ -278,8 +284,8 @@ struct Level {
     frames: Vec<Mat3>,
     /// The filtered, smoothed prolongator `S P` from the next coarser level.
     prolongation: BlockMatrix,
-    /// `A S P`.
-    product: BlockMatrix,
+    /// Two chunks of [`PRODUCT_ROWS`] rows of `A S P`, formed for the Galerkin product.
+    product: Vec<Mat3>,
     /// Estimate of the dominant mode of `D⁻¹ A`, kept for the next system.
     dominant: Vec<Vec3>,
     /// The residual after smoothing, then the prolongated coarse correction.
@@ -705,31 +711,49 @@ impl Level {
         });
     }
 
-    /// `A S P` over the product pattern: row `i` is `Σ_k A_ik (S P)_k`, the rows of `S P`
-    /// at the columns of `A`'s row, each added into the result's row by one forward walk.
-    fn product(&mut self, a: Operator, coarsening: &Coarsening) {
-        let (p, prolongation) = (&coarsening.prolongation, &self.prolongation);
-        fill_rows(&coarsening.product, &mut self.product.blocks, |i, columns, blocks| {
-            for k in a.pattern.slots(i) {
-                let (block, node) = (a.matrix.blocks[k], a.pattern.columns[k] as usize);
-                let mut at = 0;
-                for s in p.slots(node) {
-                    add_at(columns, blocks, &mut at, p.columns[s], block * prolongation.blocks[s]);
+    /// The coarser level's matrix `(S P)ᵀ A S P`. `A S P` is formed [`PRODUCT_ROWS`] fine
+    /// rows at a time, in parallel, row `i` as `Σ_k A_ik (S P)_k` (the rows of `S P` at the
+    /// columns of `A`'s row, each added by one forward walk of the result's row), while
+    /// the chunk before is added into the coarse matrix: fine row `r` adds
+    /// `(S P)_rRᵀ (A S P)_r` to each coarse row `R` of its row of `S P`, rows in order, so
+    /// each coarse block sums its terms in fine-row order on any number of threads.
+    fn galerkin(&mut self, a: Operator, coarsening: &Coarsening, out: &mut BlockMatrix) {
+        let Coarsening { prolongation: p, product: ap, coarse, .. } = coarsening;
+        let (prolongation, buffer) = (&self.prolongation.blocks, &mut self.product);
+        let rows = ap.rows();
+        let chunk_rows = |chunk: usize| chunk * PRODUCT_ROWS..rows.min((chunk + 1) * PRODUCT_ROWS);
+        let chunks = rows.div_ceil(PRODUCT_ROWS);
+        let half = (0..chunks).map(|c| ap.slots_of(chunk_rows(c)).len()).max().unwrap_or(0);
+        buffer.resize(2 * half, Mat3::ZERO);
+        let compute = |chunk: usize, blocks: &mut [Mat3]| {
+            let rows = chunk_rows(chunk);
+            let blocks = &mut blocks[..ap.slots_of(rows.clone()).len()];
+            blocks.fill(Mat3::ZERO);
+            fill_row_range(ap, rows, blocks, &|i, columns, blocks| {
+                for k in a.pattern.slots(i) {
+                    let (block, node) = (a.matrix.blocks[k], a.pattern.columns[k] as usize);
+                    let mut at = 0;
+                    for s in p.slots(node) {
+                        add_at(columns, blocks, &mut at, p.columns[s], block * prolongation[s]);
+                    }
                 }
-            }
-        });
-    }
-
-    /// The coarser level's matrix `(S P)ᵀ A S P`: row `R` is `Σ_r (S P)_rRᵀ (A S P)_r`
-    /// over the rows `r` of column `R` of `S P`.
-    fn galerkin(&self, coarsening: &Coarsening, out: &mut BlockMatrix) {
-        let Coarsening { restriction, restriction_rows, product: ap, coarse, .. } = coarsening;
-        fill_rows(coarse, &mut out.blocks, |row, columns, blocks| {
-            for k in restriction.range(row) {
-                let transposed = self.prolongation.blocks[restriction.items[k] as usize].transpose();
-                let mut at = 0;
-                for t in ap.slots(restriction_rows[k] as usize) {
-                    add_at(columns, blocks, &mut at, ap.columns[t], transposed * self.product.blocks[t]);
+            });
+        };
+        out.blocks.clear();
+        out.blocks.resize(coarse.columns.len(), Mat3::ZERO);
+        pipelined(chunks, buffer, half, compute, |chunk, blocks| {
+            let rows = chunk_rows(chunk);
+            let first = ap.slots_of(rows.clone()).start;
+            for r in rows {
+                let slots = ap.slots(r);
+                let (products, product_columns) = (&blocks[slots.start - first..slots.end - first], ap.row(r));
+                for s in p.slots(r) {
+                    let (row, transposed) = (p.columns[s] as usize, prolongation[s].transpose());
+                    let (columns, coarse_blocks) = (coarse.row(row), &mut out.blocks[coarse.slots(row)]);
+                    let mut at = 0;
+                    for (&column, product) in product_columns.iter().zip(products) {
+                        add_at(columns, coarse_blocks, &mut at, column, transposed * *product);
+                    }
                 }
             }
         });
@@ -858,8 +882,7 @@ impl Multigrid {
             level.smoother(a, coarsening.paired);
             level.rigid_motions(coarsening, points);
             level.prolongator(a, coarsening, points);
-            level.product(a, coarsening);
-            level.galerkin(coarsening, &mut below[0]);
+            level.galerkin(a, coarsening, &mut below[0]);
             let coarse = coarsening.coarse.rows();
             level.coarse_residual.resize(coarse, Vec3::ZERO);
             level.coarse_correction.resize(coarse, Vec3::ZERO);

@@ -49,6 +49,11 @@ impl BlockPattern {
         self.offsets[i] as usize..self.offsets[i + 1] as usize
     }
 
+    /// The slots of rows `rows`, which are contiguous.
+    pub fn slots_of(&self, rows: std::ops::Range<usize>) -> std::ops::Range<usize> {
+        self.offsets[rows.start] as usize..self.offsets[rows.end] as usize
+    }
+
     /// The columns of row `i`.
     pub fn row(&self, i: usize) -> &[u32] {
         &self.columns[self.slots(i)]
