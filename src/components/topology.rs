@@ -87,14 +87,15 @@ pub struct ClothTopology {
     pub particle_membranes: Csr,
     /// Which 3×3 blocks the derivatives ∂f/∂x and ∂f/∂v have.
     pub pattern: BlockPattern,
-    /// Where each spring's local blocks go in the pattern.
-    pub spring_slots: Vec<[[u32; 2]; 2]>,
+    /// Where each spring's local blocks go in the pattern, as positions within their rows
+    /// ([`BlockPattern::stencil_positions`]).
+    pub spring_positions: Vec<[[u16; 2]; 2]>,
     /// Where each hinge's local blocks go.
-    pub hinge_slots: Vec<[[u32; 4]; 4]>,
+    pub hinge_positions: Vec<[[u16; 4]; 4]>,
     /// Where each bending face's local blocks go.
-    pub face_slots: Vec<[[u32; 6]; 6]>,
+    pub face_positions: Vec<[[u16; 6]; 6]>,
     /// Where each membrane triangle's local blocks go.
-    pub membrane_slots: Vec<[[u32; 3]; 3]>,
+    pub membrane_positions: Vec<[[u16; 3]; 3]>,
     /// The particles in groups that share no element, for block descent's parallel sweeps.
     pub colouring: Colouring,
     /// The particles grouped level by level, for the multigrid preconditioner.
@@ -140,10 +141,10 @@ impl ClothTopology {
                 &hinges.faces.iter().map(|f| f.hinges).collect::<Vec<_>>(),
             ),
             particle_membranes: Csr::from_corners(count, &membranes.indices),
-            spring_slots: springs.pairs.iter().map(|&p| pattern.stencil_slots(p)).collect(),
-            hinge_slots: hinges.vertices.iter().map(|&h| pattern.stencil_slots(h)).collect(),
-            face_slots: hinges.faces.iter().map(|f| pattern.stencil_slots(f.vertices)).collect(),
-            membrane_slots: membranes.indices.iter().map(|&t| pattern.stencil_slots(t)).collect(),
+            spring_positions: springs.pairs.iter().map(|&p| pattern.stencil_positions(p)).collect(),
+            hinge_positions: hinges.vertices.iter().map(|&h| pattern.stencil_positions(h)).collect(),
+            face_positions: hinges.faces.iter().map(|f| pattern.stencil_positions(f.vertices)).collect(),
+            membrane_positions: membranes.indices.iter().map(|&t| pattern.stencil_positions(t)).collect(),
             colouring: Colouring::greedy(&pattern),
             hierarchy: Hierarchy::build(&pattern),
             pattern,

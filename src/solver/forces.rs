@@ -87,22 +87,25 @@ pub struct ForceScratch {
 /// 1 024 a chunk, 2.7 MB, 650 bytes a particle of the 64² hang scene).
 const ELEMENT_CHUNK: usize = 256;
 
-/// Adds the `N × N` local blocks `local(e)` of every element `e` to `matrix` at
-/// `slots[e]`: each chunk's blocks are computed in parallel, then added in element order
+/// Adds the `N × N` local blocks `local(e)` of every element `e` to `matrix` (over
+/// `pattern`) at the blocks of `stencil(e)` found by `positions[e]`: each chunk's blocks are computed in parallel, then added in element order
 /// while the next chunk is computed ([`pipelined`]), so the sums are the same on any
 /// number of threads and the additions overlap the element work.
 fn add_elements<const N: usize>(
     matrix: &mut BlockMatrix,
-    slots: &[[[u32; N]; N]],
+    pattern: &BlockPattern,
+    positions: &[[[u16; N]; N]],
+    stencil: impl Fn(usize) -> [u32; N] + Sync,
     buffer: &mut Vec<Mat3>,
     local: impl Fn(usize) -> [[Mat3; N]; N] + Sync,
 ) {
+    let elements = positions.len();
     let size = N * N;
-    let half = ELEMENT_CHUNK.min(slots.len()) * size;
+    let half = ELEMENT_CHUNK.min(elements) * size;
     buffer.resize(2 * half, Mat3::ZERO);
     let compute = |chunk: usize, blocks: &mut [Mat3]| {
         let first = chunk * ELEMENT_CHUNK;
-        let count = ELEMENT_CHUNK.min(slots.len() - first);
+        let count = ELEMENT_CHUNK.min(elements - first);
         blocks[..count * size].par_chunks_mut(size).with_min_len(PARALLEL_MIN_LEN / 8).enumerate().for_each(
             |(k, out)| {
                 for (out, block) in out.iter_mut().zip(local(first + k).iter().flatten()) {
@@ -111,11 +114,11 @@ fn add_elements<const N: usize>(
             },
         );
     };
-    pipelined(slots.len().div_ceil(ELEMENT_CHUNK), buffer, half, compute, |chunk, blocks| {
+    pipelined(elements.div_ceil(ELEMENT_CHUNK), buffer, half, compute, |chunk, blocks| {
         let first = chunk * ELEMENT_CHUNK;
-        let chunk_slots = &slots[first..slots.len().min(first + ELEMENT_CHUNK)];
-        for (element_slots, element_blocks) in chunk_slots.iter().zip(blocks.chunks(size)) {
-            for (slot, block) in element_slots.iter().flatten().zip(element_blocks) {
+        for (e, element_blocks) in (first..elements.min(first + ELEMENT_CHUNK)).zip(blocks.chunks(size)) {
+            let slots = pattern.slots_at(stencil(e), &positions[e]);
+            for (slot, block) in slots.iter().flatten().zip(element_blocks) {
                 matrix.blocks[*slot as usize] += *block;
             }
         }
@@ -261,26 +264,32 @@ impl ForceModel<'_> {
         let pattern = &topology.pattern;
         dfdx.reset(pattern);
         dfdv.reset(pattern, (0..self.springs.len()).any(|s| self.spring(s).damping > 0.0));
-        for (s, slots) in topology.spring_slots.iter().enumerate() {
-            let [i, j] = self.springs.pairs[s].map(|p| p as usize);
-            let spring = self.spring(s);
+        for (s, positions) in topology.spring_positions.iter().enumerate() {
+            let pair = self.springs.pairs[s];
+            let [i, j] = pair.map(|p| p as usize);
+            let (spring, slots) = (self.spring(s), pattern.slots_at(pair, positions));
             let k = spring.position_jacobian(x[i], x[j], v[i], v[j], definite);
-            dfdx.add_local(slots, &[[k, -k], [-k, k]]);
+            dfdx.add_local(&slots, &[[k, -k], [-k, k]]);
             if spring.damping > 0.0 {
                 let d = spring.velocity_jacobian(x[i], x[j]);
-                dfdv.add_local(slots, &[[d, -d], [-d, d]]);
+                dfdv.add_local(&slots, &[[d, -d], [-d, d]]);
             }
         }
         let bending = self.hinges.view();
         let ForceScratch { hinge_delta, hinge_moment, local_blocks, .. } = scratch;
-        add_elements(dfdx, &topology.face_slots, local_blocks, |f| bending.face_jacobian(f, x, hinge_delta));
+        let faces = |f: usize| self.hinges.faces[f].vertices;
+        add_elements(dfdx, pattern, &topology.face_positions, faces, local_blocks, |f| {
+            bending.face_jacobian(f, x, hinge_delta)
+        });
         if !definite {
-            add_elements(dfdx, &topology.hinge_slots, local_blocks, |h| {
+            let hinges = |h: usize| self.hinges.vertices[h];
+            add_elements(dfdx, pattern, &topology.hinge_positions, hinges, local_blocks, |h| {
                 bending.hinge_curvature_jacobian(h, x, hinge_moment[h])
             });
         }
         let material = &self.membranes.material;
-        add_elements(dfdx, &topology.membrane_slots, local_blocks, |m| {
+        let triangles = |m: usize| self.membranes.indices[m];
+        add_elements(dfdx, pattern, &topology.membrane_positions, triangles, local_blocks, |m| {
             let corners = self.membranes.indices[m].map(|p| x[p as usize]);
             self.membranes.elements[m].position_jacobian(material, corners, definite)
         });

@@ -80,6 +80,25 @@ impl BlockPattern {
     pub fn stencil_slots<const N: usize>(&self, stencil: [u32; N]) -> [[u32; N]; N] {
         stencil.map(|i| stencil.map(|j| self.slot(i, j).expect("the stencil is part of the pattern")))
     }
+
+    /// [`BlockPattern::stencil_slots`] relative to each block's row: the position of
+    /// column `stencil[b]` within row `stencil[a]`. Kept per element instead of the
+    /// slots, they take half the memory (a row holds a few dozen blocks, not 65 536).
+    pub fn stencil_positions<const N: usize>(&self, stencil: [u32; N]) -> [[u16; N]; N] {
+        let slots = self.stencil_slots(stencil);
+        std::array::from_fn(|a| {
+            let start = self.offsets[stencil[a] as usize];
+            slots[a].map(|slot| u16::try_from(slot - start).expect("a particle shares elements with fewer than 65 536"))
+        })
+    }
+
+    /// The slots of a stencil from its [`BlockPattern::stencil_positions`].
+    pub fn slots_at<const N: usize>(&self, stencil: [u32; N], positions: &[[u16; N]; N]) -> [[u32; N]; N] {
+        std::array::from_fn(|a| {
+            let start = self.offsets[stencil[a] as usize];
+            positions[a].map(|position| start + u32::from(position))
+        })
+    }
 }
 
 /// A matrix of 3×3 blocks over a [`BlockPattern`], stored in full (both triangles), so a
@@ -224,6 +243,9 @@ mod tests {
         assert_eq!(pattern.offsets, vec![0, 2, 5, 7]);
         assert_eq!(pattern.columns, vec![0, 1, 0, 1, 2, 1, 2]);
         assert_eq!(pattern.slot(0, 2), None);
+        // Row 2 is [1, 2]: column 1 is its first block, and slot 5.
+        assert_eq!(pattern.stencil_positions([2, 1]), [[1, 0], [2, 1]]);
+        assert_eq!(pattern.slots_at([2, 1], &pattern.stencil_positions([2, 1])), pattern.stencil_slots([2, 1]));
         let mut m = BlockMatrix::default();
         m.reset(&pattern);
         m.add_diagonal(&pattern, |i| i as f32 + 1.0);
