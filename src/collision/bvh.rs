@@ -80,6 +80,10 @@ pub struct Bvh {
     built_cost: f32,
     /// Number of builds, for tests and statistics.
     builds: u64,
+    /// The build's scratch (primitive order and centres), kept so that a rebuild over as
+    /// many primitives allocates nothing.
+    order: Vec<u32>,
+    centres: Vec<Vec3>,
 }
 
 impl Bvh {
@@ -95,12 +99,17 @@ impl Bvh {
     /// coinciding primitives cannot make the split loop).
     pub fn rebuild(&mut self, boxes: &[Aabb]) {
         self.nodes.clear();
-        self.leaf_of = vec![0; boxes.len()];
-        let mut order: Vec<u32> = (0..boxes.len() as u32).collect();
-        let centres: Vec<Vec3> = boxes.iter().map(Aabb::centre).collect();
+        self.leaf_of.clear();
+        self.leaf_of.resize(boxes.len(), 0);
+        let (mut order, mut centres) = (std::mem::take(&mut self.order), std::mem::take(&mut self.centres));
+        order.clear();
+        order.extend(0..boxes.len() as u32);
+        centres.clear();
+        centres.extend(boxes.iter().map(Aabb::centre));
         if !boxes.is_empty() {
             self.split(&mut order, &centres, boxes);
         }
+        (self.order, self.centres) = (order, centres);
         self.built_cost = self.inner_cost();
         self.builds += 1;
     }
