@@ -71,7 +71,13 @@ pub fn build_bending(x: &[Vec3], triangles: &[[u32; 3]], bending: &BendingDesc, 
     let mut result = BendingHinges { law, rigidity, ..BendingHinges::default() };
     // The hinge on each side of each triangle, side k running from corner k to corner k+1.
     let mut sides = vec![[NO_HINGE; 3]; triangles.len()];
-    for edge in interior_edges(triangles) {
+    // Sized up front: grown by doubling, the element arrays kept up to twice their length
+    // for the whole run.
+    let edges = interior_edges(triangles);
+    result.vertices.reserve_exact(edges.len());
+    result.rest_angle.reserve_exact(edges.len());
+    result.faces.reserve_exact(triangles.len());
+    for edge in edges {
         let h = result.vertices.len() as u32;
         let vertices = [edge.o1, edge.o2, edge.i, edge.j];
         result.vertices.push(vertices);
@@ -177,6 +183,8 @@ pub fn limited_edges(
 /// Degenerate triangles (which builders refuse before this) are skipped.
 pub fn build_membranes(x: &[Vec3], triangles: &[[u32; 3]], membrane: MembraneDesc, warp: Vec3) -> MembraneTriangles {
     let mut membranes = MembraneTriangles { material: membrane.material(), ..MembraneTriangles::default() };
+    membranes.indices.reserve_exact(triangles.len());
+    membranes.elements.reserve_exact(triangles.len());
     for tri in triangles {
         if let Some(element) = MembraneElement::from_rest(tri.map(|v| x[v as usize]), warp) {
             membranes.indices.push(*tri);
