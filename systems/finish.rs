@@ -5,6 +5,7 @@ use glam::Vec3;
 
 use super::forces::{ForceElements, ForceEnvironment};
 use crate::collision::body_contact::ContactTotals;
+use crate::collision::intersection::IntersectionCounter;
 use crate::components::{
     Cloth, Collider, ContactStats, MembraneTriangles, Particles, Pins, SelfCollision, SolverWorkspace, Springs,
     Triangles,
@@ -53,14 +54,15 @@ pub fn measure_probes(
     environment: ForceEnvironment,
     mut probes: ResMut<Probes>,
     mut cloths: Query<(&Particles, ForceElements, &Pins, &mut SolverWorkspace)>,
+    mut counter: Local<IntersectionCounter>,
 ) {
     let (mut kinetic, mut potential, mut strain, mut pin_force) = (0.0, 0.0, f32::NEG_INFINITY, Vec3::ZERO);
     let mut intersections = 0;
     for (particles, elements, pins, mut workspace) in &mut cloths {
         let model = environment.model(&particles.inv_mass, elements);
-        let SolverWorkspace { forces, force, intersections: counter, .. } = &mut *workspace;
         intersections += counter.count(&particles.position, model.triangles);
         kinetic += kinetic_energy(&particles.velocity, &particles.inv_mass);
+        let SolverWorkspace { forces, force, .. } = &mut *workspace;
         potential += model.potential_energy(&particles.position, forces);
         strain = strain.max(max_strain(&particles.position, &particles.rest_position, model.springs, model.membranes));
         if !pins.is_empty() {

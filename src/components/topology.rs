@@ -4,7 +4,6 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 
 use super::{BendingHinges, MembraneTriangles, Springs, Triangles};
-use crate::collision::intersection::IntersectionCounter;
 use crate::collision::self_contact::ContactMesh;
 use crate::solver::descent::Colouring;
 use crate::solver::elements::BlockPattern;
@@ -173,9 +172,6 @@ pub struct SolverWorkspace {
     pub support: Vec<Vec3>,
     /// The contact constraints of the current implicit step.
     pub constraints: Vec<VelocityConstraint>,
-    /// The probes' count of intersecting triangle pairs, with its box tree kept for this
-    /// cloth from frame to frame.
-    pub intersections: IntersectionCounter,
 }
 
 /// What an embedding renderer needs each frame: vertex normals beside the particle
