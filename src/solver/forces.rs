@@ -88,9 +88,10 @@ pub struct ForceScratch {
 const ELEMENT_CHUNK: usize = 256;
 
 /// Adds the `N × N` local blocks `local(e)` of every element `e` to `matrix` (over
-/// `pattern`) at the blocks of `stencil(e)` found by `positions[e]`: each chunk's blocks are computed in parallel, then added in element order
-/// while the next chunk is computed ([`pipelined`]), so the sums are the same on any
-/// number of threads and the additions overlap the element work.
+/// `pattern`) at the blocks of `stencil(e)` found by `positions[e]`: each chunk's blocks
+/// are computed in parallel, then added in element order while the next chunk is
+/// computed ([`pipelined`]), so the sums are the same on any number of threads and the
+/// additions overlap the element work.
 fn add_elements<const N: usize>(
     matrix: &mut BlockMatrix,
     pattern: &BlockPattern,
@@ -102,7 +103,6 @@ fn add_elements<const N: usize>(
     let elements = positions.len();
     let size = N * N;
     let half = ELEMENT_CHUNK.min(elements) * size;
-    buffer.resize(2 * half, Mat3::ZERO);
     let compute = |chunk: usize, blocks: &mut [Mat3]| {
         let first = chunk * ELEMENT_CHUNK;
         let count = ELEMENT_CHUNK.min(elements - first);
@@ -290,7 +290,7 @@ impl ForceModel<'_> {
         let material = &self.membranes.material;
         let triangles = |m: usize| self.membranes.indices[m];
         add_elements(dfdx, pattern, &topology.membrane_positions, triangles, local_blocks, |m| {
-            let corners = self.membranes.indices[m].map(|p| x[p as usize]);
+            let corners = triangles(m).map(|p| x[p as usize]);
             self.membranes.elements[m].position_jacobian(material, corners, definite)
         });
         let rate = self.damping_rate();

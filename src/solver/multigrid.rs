@@ -724,7 +724,6 @@ impl Level {
         let chunk_rows = |chunk: usize| chunk * PRODUCT_ROWS..rows.min((chunk + 1) * PRODUCT_ROWS);
         let chunks = rows.div_ceil(PRODUCT_ROWS);
         let half = (0..chunks).map(|c| ap.slots_of(chunk_rows(c)).len()).max().unwrap_or(0);
-        buffer.resize(2 * half, Mat3::ZERO);
         let compute = |chunk: usize, blocks: &mut [Mat3]| {
             let rows = chunk_rows(chunk);
             let blocks = &mut blocks[..ap.slots_of(rows.clone()).len()];

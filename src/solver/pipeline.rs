@@ -6,15 +6,17 @@
 
 /// For each chunk `c` in `0..count`: `compute(c, half)` fills a half of `buffer` (it may
 /// run in parallel within), then `add(c, half)` consumes it, while `compute(c + 1, ..)`
-/// fills the other half. The halves are `half_len` items each.
-pub fn pipelined<T: Send + Sync>(
+/// fills the other half. `buffer` is sized to two halves of `half_len` items; what it
+/// holds before `compute` writes is left from earlier use.
+pub fn pipelined<T: Copy + Default + Send + Sync>(
     count: usize,
-    buffer: &mut [T],
+    buffer: &mut Vec<T>,
     half_len: usize,
     compute: impl Fn(usize, &mut [T]) + Sync,
     mut add: impl FnMut(usize, &[T]) + Send,
 ) {
-    let (mut ready, mut next) = buffer[..2 * half_len].split_at_mut(half_len);
+    buffer.resize(2 * half_len, T::default());
+    let (mut ready, mut next) = buffer.split_at_mut(half_len);
     if count > 0 {
         compute(0, ready);
     }
