@@ -109,7 +109,7 @@ fn kernels(c: &mut Criterion) {
         system.add_diagonal(pattern, |i| 1.0 / cloth.particles.inv_mass[i]);
         let rhs: Vec<Vec3> = force.iter().map(|f| h * *f).collect();
         let filter = vec![Mat3::IDENTITY; count];
-        let one_sweep = DescentSettings { sweeps: 1, spectral_radius: 0.0 };
+        let one_sweep = DescentSettings { sweeps: 1, spectral_radius: 0.0, contact_bounds: false };
         let mut descent = DescentWorkspace::default();
         let mut delta = vec![Vec3::ZERO; count];
         group.bench_function(BenchmarkId::new("matrix_product", &size), |b| {
@@ -117,12 +117,28 @@ fn kernels(c: &mut Criterion) {
         });
         group.bench_function(BenchmarkId::new("descent_sweep", &size), |b| {
             b.iter(|| {
-                descend(pattern, &topology.colouring, &system, &rhs, &filter, &one_sweep, 0.0, &mut delta, &mut descent)
+                descend(
+                    pattern,
+                    &topology.colouring,
+                    &system,
+                    &rhs,
+                    &filter,
+                    &one_sweep,
+                    0.0,
+                    None,
+                    &mut delta,
+                    &mut descent,
+                )
             });
         });
         let settings = MethodSettings::default();
         for method in [Integrator::SymplecticEuler, Integrator::ImplicitEuler, Integrator::BlockDescent] {
-            let mut dynamics = ClothDynamics { model, free_inv_mass: &topology.free_inv_mass, scratch: &mut scratch };
+            let mut dynamics = ClothDynamics {
+                model,
+                free_inv_mass: &topology.free_inv_mass,
+                scratch: &mut scratch,
+                self_collision: false,
+            };
             let mut ws = IntegratorWorkspace::default();
             ws.resize(count);
             let (mut x, mut v) = (x.clone(), v.clone());

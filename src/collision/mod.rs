@@ -8,6 +8,7 @@ pub mod collider;
 pub mod coupling;
 pub mod features;
 pub mod intersection;
+pub mod motion_bounds;
 pub mod primitives;
 pub mod self_contact;
 pub mod untangle;

@@ -307,6 +307,7 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
             descent: DescentSettings {
                 sweeps: scene.solver.descent.sweeps,
                 spectral_radius: scene.solver.descent.spectral_radius,
+                contact_bounds: scene.solver.descent.contact_bounds,
             },
         },
     });

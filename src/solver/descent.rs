@@ -14,6 +14,15 @@
 //! Constraints (pins, contact normals) enter as per-particle filters `S`, as in the
 //! conjugate gradients of [`super::implicit`]: a particle's Newton step is taken within
 //! the directions its filter leaves free, `c = (S A_ii S + I − S)⁻¹ S r`.
+//!
+//! Contact with the cloth itself bounds every iteration ([`BoundedMotion`]): each particle
+//! keeps within its bound of a configuration free of crossings ([`MotionBounds`]), its
+//! Newton step cut short where it would leave it, so no sweep carries a vertex through a
+//! triangle or an edge through an edge. A sweep that cut a step short measures the bounds
+//! again from where the particles are, so a particle stopped at its bound goes on in the
+//! next sweep.
+//!
+//! [`MotionBounds`]: crate::collision::motion_bounds::MotionBounds
 
 use glam::{Mat3, Vec3};
 use rayon::prelude::*;
@@ -96,11 +105,14 @@ pub struct DescentSettings {
     /// Estimated spectral radius ρ ∈ [0, 1) of a Gauss–Seidel sweep, which sets the
     /// Chebyshev weights; 0 turns the acceleration off. Too high a value overshoots.
     pub spectral_radius: f32,
+    /// Whether a self-colliding cloth's contact with itself bounds every sweep
+    /// ([`BoundedMotion`]).
+    pub contact_bounds: bool,
 }
 
 impl Default for DescentSettings {
     fn default() -> Self {
-        Self { sweeps: 60, spectral_radius: 0.98 }
+        Self { sweeps: 60, spectral_radius: 0.98, contact_bounds: true }
     }
 }
 
@@ -112,8 +124,130 @@ pub struct DescentWorkspace {
     /// The iterate before the last sweep, for the Chebyshev extrapolation.
     previous: Vec<Vec3>,
     before: Vec<Vec3>,
-    /// Per row of the colour being swept: its correction and squared residual.
-    update: Vec<(Vec3, f64)>,
+    /// Per row of the colour being swept: its correction, squared residual and whether
+    /// its bound cut the correction short.
+    update: Vec<(Vec3, f64, bool)>,
+    /// Per particle, how far it may move from the anchor [m].
+    bounds: Vec<f32>,
+}
+
+/// Where block descent's iterate puts the particles, and how far they may move: particle
+/// `i` is at `base[i] + scale · delta[i]`, and may be at most `bounds[i]` from
+/// `anchor[i]`, bounds that `bound` measures at a configuration.
+pub struct BoundedMotion<'a> {
+    /// Positions at `delta = 0` [m].
+    pub base: &'a [Vec3],
+    /// How far a unit of `delta` moves a particle [m per unit].
+    pub scale: f32,
+    /// A configuration free of crossings; on return, where the particles end, which is
+    /// one too.
+    pub anchor: &'a mut [Vec3],
+    /// Fills, for the particles at the given positions, how far each may move [m], asked
+    /// for moves as long as the second argument [m] where the geometry allows them.
+    pub bound: &'a mut dyn FnMut(&[Vec3], f32, &mut [f32]),
+}
+
+impl BoundedMotion<'_> {
+    fn frame(&self) -> Frame<'_> {
+        Frame { base: self.base, scale: self.scale, anchor: self.anchor }
+    }
+
+    /// Makes where `delta` puts the particles the anchor.
+    fn settle(&mut self, delta: &[Vec3]) {
+        let (base, scale) = (self.base, self.scale);
+        self.anchor
+            .par_iter_mut()
+            .zip(delta.par_iter())
+            .enumerate()
+            .with_min_len(super::PARALLEL_MIN_LEN)
+            .for_each(|(i, (anchor, d))| *anchor = base[i] + scale * *d);
+    }
+}
+
+/// The positions of a [`BoundedMotion`], shared by the threads of a sweep.
+#[derive(Clone, Copy)]
+struct Frame<'a> {
+    base: &'a [Vec3],
+    scale: f32,
+    anchor: &'a [Vec3],
+}
+
+impl Frame<'_> {
+    /// Particle `i`'s distance vector from its anchor at `delta`.
+    fn offset(&self, i: usize, delta: Vec3) -> Vec3 {
+        self.base[i] + self.scale * delta - self.anchor[i]
+    }
+
+    /// The fraction of the change `change` to particle `i`'s `delta` that keeps it within
+    /// `bound` of its anchor (where it is within it): the move is cut short on its own
+    /// line, so a cut Newton step still descends the energy.
+    fn allowed(&self, i: usize, delta: Vec3, change: Vec3, bound: f32) -> f32 {
+        let (offset, step) = (self.offset(i, delta), self.scale * change);
+        let (a, b, c) = (step.length_squared(), offset.dot(step), offset.length_squared() - bound * bound);
+        if a == 0.0 || (offset + step).length_squared() <= bound * bound {
+            return 1.0;
+        }
+        // |offset + t step|² = bound², the root in [0, 1].
+        ((-b + (b * b - a * c).max(0.0).sqrt()) / a).clamp(0.0, 1.0)
+    }
+}
+
+/// Most measures of the bounds that [`advance_anchor`] makes.
+const MAX_ADVANCES: u32 = 16;
+
+/// Moves the anchor towards where `delta` starts the particles, in steps within the
+/// bounds, measuring them again after each, while that brings the farthest particle
+/// closer by a quarter; `bounds` end measured at the anchor. A start outside them, which
+/// contact stopped, is then pulled back onto them for particles the filters leave free; a
+/// constrained particle, whose `delta` the filter fixes in part, is left unbounded until
+/// the bounds are next measured. Returns the longest move the bounds were asked for.
+///
+/// Starting the sweeps from the bounds instead, every particle held back by them, would
+/// leave the sweeps a global error to remove, which Gauss–Seidel removes last: a falling
+/// strip's speed stayed at the bound per step.
+fn advance_anchor(motion: &mut BoundedMotion<'_>, delta: &mut [Vec3], filter: &[Mat3], bounds: &mut [f32]) -> f32 {
+    let n = delta.len();
+    let mut wanted = f32::INFINITY;
+    for advance in 1..=MAX_ADVANCES {
+        let frame = motion.frame();
+        let farthest = (0..n)
+            .into_par_iter()
+            .with_min_len(super::PARALLEL_MIN_LEN)
+            .map(|i| frame.offset(i, delta[i]).length())
+            .reduce(|| 0.0, f32::max);
+        let slowing = farthest > 0.75 * wanted;
+        wanted = farthest;
+        (motion.bound)(motion.anchor, wanted, bounds);
+        let frame = motion.frame();
+        let beyond = (0..n)
+            .into_par_iter()
+            .with_min_len(super::PARALLEL_MIN_LEN)
+            .filter(|&i| frame.offset(i, delta[i]).length() > bounds[i])
+            .count();
+        if beyond == 0 || slowing || advance == MAX_ADVANCES {
+            break;
+        }
+        let (base, scale, delta) = (motion.base, motion.scale, &*delta);
+        motion.anchor.par_iter_mut().enumerate().with_min_len(super::PARALLEL_MIN_LEN).for_each(|(i, anchor)| {
+            let offset = base[i] + scale * delta[i] - *anchor;
+            *anchor += offset * (bounds[i] / offset.length()).min(1.0);
+        });
+    }
+    let frame = motion.frame();
+    delta.par_iter_mut().zip(bounds.par_iter_mut()).enumerate().with_min_len(super::PARALLEL_MIN_LEN).for_each(
+        |(i, (d, bound))| {
+            let offset = frame.offset(i, *d);
+            let length = offset.length();
+            if length > *bound {
+                if filter[i] == Mat3::IDENTITY {
+                    *d += offset * (*bound / length - 1.0) / frame.scale;
+                } else {
+                    *bound = f32::INFINITY;
+                }
+            }
+        },
+    );
+    wanted
 }
 
 /// Improves `delta` towards the solution of `system · delta = rhs` within the per-particle
@@ -122,6 +256,9 @@ pub struct DescentWorkspace {
 /// the sweeps only move it within the filters. A sweep visits the colours forward, then
 /// backward. Stops once the residual met in a forward pass is at most `tolerance` times the
 /// filtered right-hand side. Returns the sweeps taken.
+///
+/// With `motion`, every particle keeps within its bound of the anchor, which first
+/// advances towards the start ([`advance_anchor`]).
 #[allow(clippy::too_many_arguments)]
 pub fn descend(
     pattern: &BlockPattern,
@@ -131,6 +268,7 @@ pub fn descend(
     filter: &[Mat3],
     settings: &DescentSettings,
     tolerance: f32,
+    mut motion: Option<BoundedMotion<'_>>,
     delta: &mut [Vec3],
     ws: &mut DescentWorkspace,
 ) -> u32 {
@@ -143,10 +281,19 @@ pub fn descend(
     }));
     ws.previous.resize(n, Vec3::ZERO);
     ws.before.resize(n, Vec3::ZERO);
+    // The longest move the bounds are asked to allow: the farthest the start took a
+    // particle from its anchor.
+    let mut wanted = 0.0f32;
+    if let Some(motion) = &mut motion {
+        ws.bounds.resize(n, 0.0);
+        wanted = advance_anchor(motion, delta, filter, &mut ws.bounds);
+    }
     let target: f64 = f64::from(tolerance).powi(2)
         * rhs.iter().zip(filter).map(|(r, s)| f64::from((*s * *r).length_squared())).sum::<f64>();
     let rho2 = settings.spectral_radius * settings.spectral_radius;
     let mut omega = 1.0f32;
+    let mut sweeps = settings.sweeps;
+    let mut cuts = 0u32;
     for sweep in 0..settings.sweeps {
         ws.before.copy_from_slice(delta);
         let mut residual = 0.0f64;
@@ -156,8 +303,9 @@ pub fn descend(
         let colours = colouring.colours();
         for (visit, c) in (0..colours).chain((0..colours).rev()).enumerate() {
             let rows = colouring.colour(c);
-            ws.update.resize(rows.len(), (Vec3::ZERO, 0.0));
-            let (step, current) = (&ws.step, &*delta);
+            ws.update.resize(rows.len(), (Vec3::ZERO, 0.0, false));
+            let (step, bounds, current) = (&ws.step, &ws.bounds, &*delta);
+            let frame = motion.as_ref().map(BoundedMotion::frame);
             ws.update.par_iter_mut().zip(rows.par_iter()).with_min_len(ROWS_PER_TASK).for_each(|(update, &i)| {
                 let i = i as usize;
                 let mut product = Vec3::ZERO;
@@ -165,17 +313,21 @@ pub fn descend(
                     product += system.blocks[k] * current[pattern.columns[k] as usize];
                 }
                 let r = filter[i] * (rhs[i] - product);
-                *update = (step[i] * r, f64::from(r.length_squared()));
+                let correction = step[i] * r;
+                let allowed = frame.map_or(1.0, |f| f.allowed(i, current[i], correction, bounds[i]));
+                *update = (allowed * correction, f64::from(r.length_squared()), allowed < 1.0);
             });
-            for (&i, &(correction, r2)) in rows.iter().zip(&ws.update) {
+            for (&i, &(correction, r2, cut)) in rows.iter().zip(&ws.update) {
                 delta[i as usize] += correction;
+                cuts += u32::from(cut);
                 if visit < colours {
                     residual += r2;
                 }
             }
         }
         if residual <= target {
-            return sweep + 1;
+            sweeps = sweep + 1;
+            break;
         }
         // Chebyshev: ω₁ = 1, ω₂ = 2 / (2 − ρ²), ω_{k+1} = 4 / (4 − ρ² ω_k), after
         // PLAIN_SWEEPS plain ones. Its polynomial ripples over the whole spectrum, so an
@@ -187,20 +339,45 @@ pub fn descend(
             Some(_) => 4.0 / (4.0 - rho2 * omega),
         };
         if omega != 1.0 {
-            delta
+            let (bounds, frame) = (&ws.bounds, motion.as_ref().map(BoundedMotion::frame));
+            cuts += delta
                 .par_iter_mut()
                 .zip(ws.previous.par_iter())
+                .enumerate()
                 .with_min_len(super::PARALLEL_MIN_LEN)
-                .for_each(|(d, p)| *d = omega * (*d - *p) + *p);
+                .map(|(i, (d, p))| {
+                    let extrapolated = omega * (*d - *p) + *p;
+                    let allowed = frame.map_or(1.0, |f| f.allowed(i, *d, extrapolated - *d, bounds[i]));
+                    *d = if allowed < 1.0 { *d + allowed * (extrapolated - *d) } else { extrapolated };
+                    u32::from(allowed < 1.0)
+                })
+                .sum::<u32>();
         }
         std::mem::swap(&mut ws.previous, &mut ws.before);
+        // Bounds that cut steps short are measured again after sweeps 1, 2, 4, 8…: a
+        // particle pressed against another layer is cut at every sweep, and measuring
+        // again gains it only a fraction of its shrinking gap.
+        if let Some(motion) = &mut motion
+            && cuts > 0
+            && (sweep + 1).is_power_of_two()
+        {
+            motion.settle(delta);
+            (motion.bound)(motion.anchor, wanted, &mut ws.bounds);
+            cuts = 0;
+        }
     }
-    settings.sweeps
+    if let Some(motion) = &mut motion {
+        motion.settle(delta);
+    }
+    sweeps
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::collision::motion_bounds::tests::{Lcg, any_crossing, two_layers};
+    use crate::collision::motion_bounds::{MotionBounds, Surface};
+    use crate::collision::self_contact::ContactMesh;
 
     /// A chain of `n` particles joined by springs of stiffness `k`, mass `m`, as the
     /// system `M + k L` of an implicit step, block-diagonal in the axes.
@@ -297,9 +474,9 @@ mod tests {
         let error_after = |sweeps: u32, spectral_radius: f32| {
             let mut delta = vec![Vec3::ZERO; n];
             delta[n - 1] = Vec3::new(0.25, 0.0, 0.0);
-            let settings = DescentSettings { sweeps, spectral_radius };
+            let settings = DescentSettings { sweeps, spectral_radius, contact_bounds: false };
             let mut ws = DescentWorkspace::default();
-            descend(&pattern, &colouring, &system, &rhs, &filter, &settings, 0.0, &mut delta, &mut ws);
+            descend(&pattern, &colouring, &system, &rhs, &filter, &settings, 0.0, None, &mut delta, &mut ws);
             assert_eq!(delta[0], Vec3::ZERO, "the pin moved");
             assert_eq!(delta[n - 1].x, 0.25, "the prescribed normal part moved");
             delta.iter().zip(&exact).map(|(d, e)| (*d - *e).length()).fold(0.0f32, f32::max)
@@ -311,5 +488,54 @@ mod tests {
         assert!(accelerated < 0.01 * plain, "Chebyshev {accelerated} is no faster than plain {plain}");
         // Plain Gauss–Seidel descends: more sweeps, less error.
         assert!(error_after(100, 0.0) < error_after(10, 0.0));
+    }
+
+    #[test]
+    fn bounded_sweeps_never_carry_a_layer_through_another() {
+        // Two sheets 4 mm apart, springs along their edges, one step of 1/60 s whose
+        // solution moves the upper sheet 12 mm down, through the lower one.
+        let (x0, triangles) = two_layers(&mut Lcg(7));
+        let edges = ContactMesh::edges_of(&triangles);
+        let n = x0.len();
+        let (h, mass, stiffness) = (1.0f32 / 60.0, 1e-3f32, 10.0f32);
+        let pattern = BlockPattern::from_stencils(n, edges.iter().map(|e| &e[..]));
+        let mut system = BlockMatrix::default();
+        system.reset(&pattern);
+        system.add_diagonal(&pattern, |_| mass);
+        let k = Mat3::from_diagonal(Vec3::splat(h * h * stiffness));
+        for e in &edges {
+            system.add_local(&pattern.stencil_slots(*e), &[[k, -k], [-k, k]]);
+        }
+        let solution: Vec<Vec3> = (0..n).map(|i| if i >= 36 { -0.012 / h * Vec3::Y } else { Vec3::ZERO }).collect();
+        let mut rhs = vec![Vec3::ZERO; n];
+        system.multiply(&pattern, &solution, &mut rhs);
+        let (colouring, filter) = (Colouring::greedy(&pattern), vec![Mat3::IDENTITY; n]);
+        let surface = Surface { triangles: &triangles, edges: &edges };
+        // Where the particles are after `sweeps` sweeps, with or without the bounds: the
+        // sweeps of a longer run begin as a shorter run's did.
+        let after = |sweeps: u32, bounded: bool| -> Vec<Vec3> {
+            let settings = DescentSettings { sweeps, ..DescentSettings::default() };
+            let (mut delta, mut ws) = (vec![Vec3::ZERO; n], DescentWorkspace::default());
+            let (mut search, mut anchor) = (MotionBounds::default(), x0.clone());
+            let mut bound = |x: &[Vec3], wanted: f32, out: &mut [f32]| search.compute(surface, x, wanted, out);
+            let motion = bounded.then(|| BoundedMotion { base: &x0, scale: h, anchor: &mut anchor, bound: &mut bound });
+            descend(&pattern, &colouring, &system, &rhs, &filter, &settings, 0.0, motion, &mut delta, &mut ws);
+            x0.iter().zip(&delta).map(|(x, d)| *x + h * *d).collect()
+        };
+        let path = |bounded: bool| -> Vec<Vec<Vec3>> {
+            std::iter::once(x0.clone()).chain((1..=30).map(|sweeps| after(sweeps, bounded))).collect()
+        };
+        let gaps = |x: &[Vec3]| (0..36).map(|i| x[i + 36].y - x[i].y).fold(f32::INFINITY, f32::min);
+        let bounded = path(true);
+        for (k, pair) in bounded.windows(2).enumerate() {
+            assert!(!any_crossing(&triangles, &edges, &pair[0], &pair[1]), "sweep {} crossed", k + 1);
+        }
+        // The upper sheet comes down onto the lower one, but stays above it.
+        let last = &bounded[30];
+        assert!((0.0..0.001).contains(&gaps(last)), "gap left {}", gaps(last));
+        // Unbounded, the sweeps carry it through.
+        let free = path(false);
+        assert!(free.windows(2).any(|pair| any_crossing(&triangles, &edges, &pair[0], &pair[1])));
+        assert!(gaps(&free[30]) < -0.005);
     }
 }

@@ -12,6 +12,7 @@ use super::implicit::LinearDynamics;
 use super::integrate::Dynamics;
 use super::multigrid::Hierarchy;
 use super::pipeline::pipelined;
+use crate::collision::motion_bounds::Surface;
 use crate::components::{BendingHinges, ClothTopology, MembraneTriangles, Springs};
 
 /// Air around the cloth.
@@ -332,6 +333,8 @@ pub struct ClothDynamics<'a> {
     pub free_inv_mass: &'a [f32],
     /// Element buffers for [`ForceModel::eval`].
     pub scratch: &'a mut ForceScratch,
+    /// Whether the cloth collides with itself, which bounds block descent's iterations.
+    pub self_collision: bool,
 }
 
 impl Dynamics for ClothDynamics<'_> {
@@ -359,6 +362,10 @@ impl LinearDynamics for ClothDynamics<'_> {
 
     fn colouring(&self) -> &Colouring {
         &self.model.topology.colouring
+    }
+
+    fn contact_surface(&self) -> Option<Surface<'_>> {
+        self.self_collision.then_some(Surface { triangles: self.model.triangles, edges: &self.model.topology.edges })
     }
 
     fn hierarchy(&self) -> &Hierarchy {

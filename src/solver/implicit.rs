@@ -22,11 +22,12 @@ use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
 use super::PARALLEL_MIN_LEN;
-use super::descent::{Colouring, DescentSettings, DescentWorkspace, descend};
+use super::descent::{BoundedMotion, Colouring, DescentSettings, DescentWorkspace, descend};
 use super::elements::spring::outer;
 use super::elements::{BlockMatrix, BlockPattern, VelocityJacobian};
 use super::integrate::{Dynamics, StepReport};
 use super::multigrid::{Hierarchy, Multigrid};
+use crate::collision::motion_bounds::{MotionBounds, Surface};
 
 /// Rayleigh damping `C = αM + βK_s` (K_s the stiffness, `−∂f/∂x`).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -93,6 +94,11 @@ pub trait LinearDynamics: Dynamics {
     fn colouring(&self) -> &Colouring;
     /// The particles grouped level by level, for the multigrid preconditioner.
     fn hierarchy(&self) -> &Hierarchy;
+    /// The surface whose contact with itself bounds each iteration of block descent, if
+    /// the system collides with itself.
+    fn contact_surface(&self) -> Option<Surface<'_>> {
+        None
+    }
     /// Forces [N] and their semi-definite derivatives at `(x, v, t)`.
     fn linearize(
         &mut self,
@@ -135,6 +141,10 @@ pub struct ImplicitWorkspace {
     prescribed: Vec<Vec3>,
     /// Block descent's buffers.
     descent: DescentWorkspace,
+    /// Where block descent's contact bounds were last measured, free of crossings.
+    anchor: Vec<Vec3>,
+    /// The search for the contact bounds.
+    motion_bounds: MotionBounds,
     /// The multigrid preconditioner's levels.
     multigrid: Multigrid,
     /// Impulse each contact constraint applied in the last step [N·s], parallel to the
@@ -226,6 +236,14 @@ pub fn implicit_step(
     prescribe(dynamics, constraints, v, &mut ws.prescribed);
     let (theta, Rayleigh { alpha, beta }) = (settings.theta, settings.rayleigh);
     let mut report = StepReport { accepted: 1, ..StepReport::default() };
+    if bounds_contact(settings, dynamics) {
+        // The step starts free of crossings, and at Δv = 0 moves inertially.
+        ws.anchor.clear();
+        ws.anchor.extend_from_slice(x);
+        for i in 0..n {
+            ws.x[i] = x[i] + h * v[i];
+        }
+    }
 
     // Linearised step about the start: F₀ = f₀ − αMv₀ + βKv₀, and
     // A Δv = h F₀ + h²θ K v₀.
@@ -237,7 +255,7 @@ pub fn implicit_step(
         ws.rhs[i] = h * ws.start_force[i] + h * h * theta * ws.product[i];
     }
     build_system(settings, h, dynamics, ws);
-    report.iterations += solve(dynamics, settings, Start::Prescribed, x, ws);
+    report.iterations += solve(dynamics, settings, Start::Prescribed, x, h * theta, ws);
     ws.constraint_impulses.clear();
     ws.constraint_impulses.resize(constraints.len(), Vec3::ZERO);
     add_constraint_impulses(dynamics.pattern(), constraints, ws);
@@ -256,7 +274,7 @@ pub fn implicit_step(
             for (delta, prescribed) in ws.delta.iter_mut().zip(&ws.prescribed) {
                 *delta += *prescribed;
             }
-            report.iterations += solve(dynamics, settings, Start::Given, x, ws);
+            report.iterations += solve(dynamics, settings, Start::Given, x, h * theta, ws);
             ws.constraint_impulses.fill(Vec3::ZERO);
             add_constraint_impulses(dynamics.pattern(), constraints, ws);
         }
@@ -285,7 +303,7 @@ pub fn implicit_step(
                 h * ((1.0 - theta) * (ws.start_force[i] + damping_change) + theta * end_force) - mass * ws.dv[i];
         }
         build_system(settings, h, dynamics, ws);
-        report.iterations += solve(dynamics, settings, Start::Zero, x, ws);
+        report.iterations += solve(dynamics, settings, Start::Zero, x, h * theta, ws);
         add_constraint_impulses(dynamics.pattern(), constraints, ws);
         for i in 0..n {
             ws.dv[i] += ws.delta[i];
@@ -365,13 +383,21 @@ enum Start {
     Given,
 }
 
+/// Whether block descent bounds this system's iterations by its contact with itself.
+fn bounds_contact(settings: &ImplicitSettings, dynamics: &impl LinearDynamics) -> bool {
+    matches!(settings.linear_solver, LinearSolver::BlockDescent(d) if d.contact_bounds)
+        && dynamics.contact_surface().is_some()
+}
+
 /// Solves `system · delta = rhs` within the filters with the settings' linear solver, from
-/// `start`. Returns the iterations (or sweeps) taken.
+/// `start`. Block descent keeps each particle within its contact bounds, the particles at
+/// `ws.x + scale · delta` (`scale` = hθ [s]). Returns the iterations (or sweeps) taken.
 fn solve(
     dynamics: &impl LinearDynamics,
     settings: &ImplicitSettings,
     start: Start,
     x: &[Vec3],
+    scale: f32,
     ws: &mut ImplicitWorkspace,
 ) -> u32 {
     // Both solvers start from rest (Δv = 0: the inertial step), never from the last step's
@@ -391,17 +417,25 @@ fn solve(
             ws.multigrid.record(iterations);
             iterations
         }
-        LinearSolver::BlockDescent(descent) => descend(
-            pattern,
-            dynamics.colouring(),
-            &ws.system,
-            &ws.rhs,
-            &ws.filter,
-            &descent,
-            settings.cg_tolerance,
-            &mut ws.delta,
-            &mut ws.descent,
-        ),
+        LinearSolver::BlockDescent(descent) => {
+            let ImplicitWorkspace { x: base, anchor, motion_bounds, .. } = ws;
+            let surface = dynamics.contact_surface().filter(|_| descent.contact_bounds);
+            let mut bound = surface
+                .map(|s| move |x: &[Vec3], wanted: f32, out: &mut [f32]| motion_bounds.compute(s, x, wanted, out));
+            let motion = bound.as_mut().map(|bound| BoundedMotion { base, scale, anchor, bound });
+            descend(
+                pattern,
+                dynamics.colouring(),
+                &ws.system,
+                &ws.rhs,
+                &ws.filter,
+                &descent,
+                settings.cg_tolerance,
+                motion,
+                &mut ws.delta,
+                &mut ws.descent,
+            )
+        }
     }
 }
 

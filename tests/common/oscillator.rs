@@ -85,7 +85,12 @@ impl ParticleSystem {
             user_forces: &[],
         };
         let mut scratch = ForceScratch::default();
-        let mut dynamics = ClothDynamics { model, free_inv_mass: &self.topology.free_inv_mass, scratch: &mut scratch };
+        let mut dynamics = ClothDynamics {
+            model,
+            free_inv_mass: &self.topology.free_inv_mass,
+            scratch: &mut scratch,
+            self_collision: false,
+        };
         let mut x = self.x.clone();
         let mut v = vec![Vec3::ZERO; x.len()];
         let mut ws = IntegratorWorkspace::default();

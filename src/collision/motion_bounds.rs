@@ -1,0 +1,273 @@
+//! How far each vertex of a cloth may move from a configuration, in any direction, so that
+//! no vertex passes through a triangle and no edge through an edge whatever the other
+//! vertices do within their own bounds: the conservative bounds of offset geometric
+//! contact (Chen et al. 2025), which vertex block descent applies to every iteration.
+//!
+//! A point–triangle or edge–edge pair `d` apart stays apart while each of its four
+//! vertices moves less than `d / 2` along a straight line: every point of a triangle or
+//! an edge is a convex combination of its vertices, so it moves no farther than they do,
+//! and the pair's distance falls by at most twice the largest move. Each vertex may move
+//! [`GAMMA`] (< ½) times the distance of the nearest pair it belongs to. Pairs farther
+//! apart than the reach `r` are not looked for; no vertex moves more than `GAMMA r` either,
+//! so they stay apart too.
+
+use std::sync::atomic::{AtomicU32, Ordering};
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::bvh::{Aabb, Bvh};
+use super::primitives::{closest_between_segments, closest_on_triangle};
+use crate::solver::PARALLEL_MIN_LEN;
+
+/// A vertex's bound as a fraction of its nearest pair's distance: below ½, with room for
+/// rounding; a pair ends at least a fifth of its distance apart.
+pub const GAMMA: f32 = 0.4;
+
+/// A cloth surface whose vertices must not pass through it.
+#[derive(Debug, Clone, Copy)]
+pub struct Surface<'a> {
+    /// Triangles.
+    pub triangles: &'a [[u32; 3]],
+    /// The triangles' edges, each once.
+    pub edges: &'a [[u32; 2]],
+}
+
+/// The trees and buffers of [`MotionBounds::compute`], kept from call to call so that a
+/// warm call allocates nothing. A clone starts with empty buffers.
+#[derive(Debug, Default)]
+pub struct MotionBounds {
+    triangle_tree: Bvh,
+    edge_tree: Bvh,
+    triangle_boxes: Vec<Aabb>,
+    edge_boxes: Vec<Aabb>,
+    /// Per vertex, the distance of the nearest pair it belongs to, as the bits of a
+    /// non-negative `f32`, whose order is the numbers' order: an atomic minimum over them
+    /// is exact and does not depend on the order the pairs are met in.
+    nearest: Vec<AtomicU32>,
+    /// How many times the bounds were computed, for statistics.
+    computed: u64,
+}
+
+impl Clone for MotionBounds {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
+}
+
+impl MotionBounds {
+    /// Sets `bounds[v]` [m] to how far vertex `v` of `surface`, at `x`, may move, looking
+    /// for pairs as far as a move of `wanted` [m] needs: the reach is `2 wanted / GAMMA`,
+    /// from an eighth of the mean edge length to all of it. Each step of the search grows
+    /// as the reach squared (in a heap of folds, as the layers within it), and on a
+    /// smooth sheet the nearest primitives that do not touch a vertex are about 0.7 of an
+    /// edge from it, so looking farther than an edge would loosen no bound.
+    pub fn compute(&mut self, surface: Surface<'_>, x: &[Vec3], wanted: f32, bounds: &mut [f32]) {
+        self.computed += 1;
+        let Surface { triangles, edges } = surface;
+        let edge = if edges.is_empty() {
+            0.0
+        } else {
+            edges.iter().map(|&[a, b]| x[a as usize].distance(x[b as usize])).sum::<f32>() / edges.len() as f32
+        };
+        let reach = (2.0 * wanted / GAMMA).clamp(0.125 * edge, edge);
+        triangles
+            .par_iter()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .map(|t| Aabb::around(t.map(|k| x[k as usize])))
+            .collect_into_vec(&mut self.triangle_boxes);
+        edges
+            .par_iter()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .map(|e| Aabb::around(e.map(|k| x[k as usize])))
+            .collect_into_vec(&mut self.edge_boxes);
+        self.triangle_tree.refit(&self.triangle_boxes);
+        self.edge_tree.refit(&self.edge_boxes);
+        self.nearest.resize_with(x.len(), AtomicU32::default);
+        self.nearest
+            .par_iter()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .for_each(|d| d.store(reach.to_bits(), Ordering::Relaxed));
+        let Self { triangle_tree, edge_tree, edge_boxes, nearest, .. } = &*self;
+        let lower = |k: u32, d: f32| {
+            nearest[k as usize].fetch_min(d.to_bits(), Ordering::Relaxed);
+        };
+        // Each vertex against the triangles around it.
+        (0..x.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).for_each(|v| {
+            let p = x[v as usize];
+            let mut own = reach;
+            triangle_tree.query(&Aabb { min: p, max: p }.inflated(reach), |t| {
+                let triangle = triangles[t as usize];
+                if triangle.contains(&v) {
+                    return;
+                }
+                let [a, b, c] = triangle.map(|k| x[k as usize]);
+                let w = closest_on_triangle(p, a, b, c);
+                let d = p.distance(w[0] * a + w[1] * b + w[2] * c);
+                if d < reach {
+                    own = own.min(d);
+                    triangle.iter().for_each(|&k| lower(k, d));
+                }
+            });
+            lower(v, own);
+        });
+        // Each edge against the edges after it.
+        (0..edges.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).for_each(|e| {
+            let [a, b] = edges[e as usize];
+            let (pa, pb) = (x[a as usize], x[b as usize]);
+            edge_tree.query_from(&edge_boxes[e as usize].inflated(reach), e + 1, |f| {
+                let [c, d] = edges[f as usize];
+                if c == a || c == b || d == a || d == b {
+                    return;
+                }
+                let (pc, pd) = (x[c as usize], x[d as usize]);
+                let (s, t) = closest_between_segments(pa, pb, pc, pd);
+                let distance = (pa + s * (pb - pa)).distance(pc + t * (pd - pc));
+                if distance < reach {
+                    [a, b, c, d].into_iter().for_each(|k| lower(k, distance));
+                }
+            });
+        });
+        bounds
+            .par_iter_mut()
+            .zip(nearest.par_iter())
+            .with_min_len(PARALLEL_MIN_LEN)
+            .for_each(|(bound, d)| *bound = GAMMA * f32::from_bits(d.load(Ordering::Relaxed)));
+    }
+
+    /// How many times [`MotionBounds::compute`] ran.
+    pub fn computed(&self) -> u64 {
+        self.computed
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::collision::primitives::Sweep;
+    use crate::collision::self_contact::ContactMesh;
+
+    /// A small deterministic generator: the tests need scattered numbers, not good ones.
+    pub(crate) struct Lcg(pub(crate) u64);
+
+    impl Lcg {
+        fn next(&mut self) -> f32 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (self.0 >> 40) as f32 / (1u64 << 24) as f32
+        }
+
+        fn direction(&mut self) -> Vec3 {
+            loop {
+                let v = Vec3::new(self.next(), self.next(), self.next()) * 2.0 - Vec3::ONE;
+                if (0.01..1.0).contains(&v.length_squared()) {
+                    return v.normalize();
+                }
+            }
+        }
+    }
+
+    /// Two crumpled 6 × 6 sheets 4 mm apart, as one mesh: the lower one's 36 vertices
+    /// first, each above the other's vertex of the same number less 36.
+    pub(crate) fn two_layers(rng: &mut Lcg) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let (n, spacing) = (6u32, 0.01f32);
+        let mut x = Vec::new();
+        let mut triangles = Vec::new();
+        for layer in 0..2u32 {
+            let offset = layer * n * n;
+            for i in 0..n {
+                for j in 0..n {
+                    let y = 0.004 * layer as f32 + 0.0015 * (rng.next() - 0.5);
+                    x.push(Vec3::new(i as f32 * spacing, y, j as f32 * spacing));
+                }
+            }
+            for i in 0..n - 1 {
+                for j in 0..n - 1 {
+                    let k = offset + i * n + j;
+                    triangles.push([k, k + n, k + 1]);
+                    triangles.push([k + 1, k + n, k + n + 1]);
+                }
+            }
+        }
+        (x, triangles)
+    }
+
+    /// Whether any vertex passes through a triangle or any edge through an edge it does
+    /// not share a vertex with, moving on straight lines from `x0` to `x1`.
+    pub(crate) fn any_crossing(triangles: &[[u32; 3]], edges: &[[u32; 2]], x0: &[Vec3], x1: &[Vec3]) -> bool {
+        let sweep = |k: [u32; 4]| Sweep { start: k.map(|i| x0[i as usize]), end: k.map(|i| x1[i as usize]) };
+        let point_triangle = (0..x0.len() as u32).any(|p| {
+            triangles
+                .iter()
+                .any(|&[a, b, c]| ![a, b, c].contains(&p) && sweep([p, a, b, c]).point_triangle_hit(0.0).is_some())
+        });
+        let edge_edge = edges.iter().enumerate().any(|(i, &[a, b])| {
+            edges[i + 1..].iter().any(|&[c, d]| {
+                ![a, b].contains(&c) && ![a, b].contains(&d) && sweep([a, b, c, d]).edge_edge_hit(0.0).is_some()
+            })
+        });
+        point_triangle || edge_edge
+    }
+
+    #[test]
+    fn moves_within_the_bounds_cross_nothing_and_moves_past_them_do() {
+        let mut rng = Lcg(7);
+        let (x0, triangles) = two_layers(&mut rng);
+        let edges = ContactMesh::edges_of(&triangles);
+        let surface = Surface { triangles: &triangles, edges: &edges };
+        let mut bounds = vec![0.0; x0.len()];
+        let mut motion = MotionBounds::default();
+        motion.compute(surface, &x0, 1.0, &mut bounds);
+        // Each bound is at most GAMMA times the layers' gap: the nearest pair of a vertex
+        // is across the gap (4 ± 1.5 mm) or along its own sheet (7 mm).
+        assert!(bounds.iter().all(|&b| b > 0.0 && b <= GAMMA * 0.0055 + 1e-6), "{bounds:?}");
+        // Every vertex moves its whole bound, the top layer down and the bottom up or in
+        // random directions: nothing crosses.
+        for trial in 0..20 {
+            let x1: Vec<Vec3> = x0
+                .iter()
+                .zip(&bounds)
+                .enumerate()
+                .map(|(i, (p, b))| {
+                    let towards = if i < 36 { Vec3::Y } else { -Vec3::Y };
+                    let direction = if trial % 2 == 0 { towards } else { rng.direction() };
+                    *p + *b * direction
+                })
+                .collect();
+            assert!(!any_crossing(&triangles, &edges, &x0, &x1), "trial {trial} crossed");
+        }
+        // The top layer pressed through the bottom one by 1.2 cm crosses: the check can fail.
+        let through: Vec<Vec3> =
+            x0.iter().enumerate().map(|(i, p)| if i < 36 { *p } else { *p - 0.012 * Vec3::Y }).collect();
+        assert!(any_crossing(&triangles, &edges, &x0, &through));
+        // A second call over the same mesh gives the same bounds.
+        let mut again = vec![0.0; x0.len()];
+        motion.compute(surface, &x0, 1.0, &mut again);
+        assert_eq!(again, bounds);
+        assert_eq!(motion.computed(), 2);
+    }
+
+    #[test]
+    fn a_lone_flat_sheet_is_bounded_by_its_own_nearest_primitives() {
+        // A flat 4 × 4 grid of unit spacing split along one diagonal: a vertex's nearest
+        // primitive not touching it is a diagonal edge of a neighbouring cell, 1/√2 away.
+        let n = 4u32;
+        let x: Vec<Vec3> = (0..n * n).map(|k| Vec3::new((k / n) as f32, 0.0, (k % n) as f32)).collect();
+        let mut triangles = Vec::new();
+        for i in 0..n - 1 {
+            for j in 0..n - 1 {
+                let k = i * n + j;
+                triangles.push([k, k + n, k + 1]);
+                triangles.push([k + 1, k + n, k + n + 1]);
+            }
+        }
+        let edges = ContactMesh::edges_of(&triangles);
+        let mut bounds = vec![0.0; x.len()];
+        MotionBounds::default().compute(Surface { triangles: &triangles, edges: &edges }, &x, 1.0, &mut bounds);
+        let reach: f32 =
+            edges.iter().map(|&[a, b]| x[a as usize].distance(x[b as usize])).sum::<f32>() / edges.len() as f32;
+        assert!(reach > std::f32::consts::FRAC_1_SQRT_2);
+        for (v, b) in bounds.iter().enumerate() {
+            assert!((b - GAMMA * std::f32::consts::FRAC_1_SQRT_2).abs() < 1e-6, "vertex {v}: {b}");
+        }
+    }
+}
