@@ -18,9 +18,9 @@
 //! Contact with the cloth itself bounds every iteration ([`BoundedMotion`]): each particle
 //! keeps within its bound of a configuration free of crossings ([`MotionBounds`]), its
 //! Newton step cut short where it would leave it, so no sweep carries a vertex through a
-//! triangle or an edge through an edge. A sweep that cut a step short measures the bounds
-//! again from where the particles are, so a particle stopped at its bound goes on in the
-//! next sweep.
+//! triangle or an edge through an edge. Bounds that cut steps short are measured again
+//! from where the particles are after sweeps 1, 2, 4, 8…, so a particle stopped at its
+//! bound goes on in the sweeps after.
 //!
 //! [`MotionBounds`]: crate::collision::motion_bounds::MotionBounds
 

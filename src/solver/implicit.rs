@@ -236,7 +236,7 @@ pub fn implicit_step(
     prescribe(dynamics, constraints, v, &mut ws.prescribed);
     let (theta, Rayleigh { alpha, beta }) = (settings.theta, settings.rayleigh);
     let mut report = StepReport { accepted: 1, ..StepReport::default() };
-    if bounds_contact(settings, dynamics) {
+    if bounding_surface(settings, dynamics).is_some() {
         // The step starts free of crossings, and at Δv = 0 moves inertially.
         ws.anchor.clear();
         ws.anchor.extend_from_slice(x);
@@ -383,10 +383,13 @@ enum Start {
     Given,
 }
 
-/// Whether block descent bounds this system's iterations by its contact with itself.
-fn bounds_contact(settings: &ImplicitSettings, dynamics: &impl LinearDynamics) -> bool {
+/// The surface whose contact with itself bounds block descent's iterations, if the
+/// settings' solver is block descent with contact bounds and the system collides with
+/// itself.
+fn bounding_surface<'a>(settings: &ImplicitSettings, dynamics: &'a impl LinearDynamics) -> Option<Surface<'a>> {
     matches!(settings.linear_solver, LinearSolver::BlockDescent(d) if d.contact_bounds)
-        && dynamics.contact_surface().is_some()
+        .then(|| dynamics.contact_surface())
+        .flatten()
 }
 
 /// Solves `system · delta = rhs` within the filters with the settings' linear solver, from
@@ -419,8 +422,7 @@ fn solve(
         }
         LinearSolver::BlockDescent(descent) => {
             let ImplicitWorkspace { x: base, anchor, motion_bounds, .. } = ws;
-            let surface = dynamics.contact_surface().filter(|_| descent.contact_bounds);
-            let mut bound = surface
+            let mut bound = bounding_surface(settings, dynamics)
                 .map(|s| move |x: &[Vec3], wanted: f32, out: &mut [f32]| motion_bounds.compute(s, x, wanted, out));
             let motion = bound.as_mut().map(|bound| BoundedMotion { base, scale, anchor, bound });
             descend(
