@@ -32,7 +32,9 @@
 //! topology. The numbers ([`Multigrid`]) are kept from system to system: the system of a
 //! step differs little from the last one's, so only the finest smoother is rebuilt for
 //! each, and the prolongators and coarse matrices only when the iterations they give have
-//! grown (see [`Multigrid::prepare`]). Constraint filters `S` (pins, contact normals) act
+//! grown (see [`Multigrid::prepare`]), or for every system while levels one system old
+//! prove too weak, as they do at frame-sized steps on a swinging sheet (see
+//! [`Multigrid::record`]). Constraint filters `S` (pins, contact normals) act
 //! on the finest level: the prolongator is filtered, `S P`, and the current filter is
 //! applied again to what is restricted and prolongated, so coarse corrections never move a
 //! pinned particle or cross a contact normal, even with a prolongator built under another
@@ -106,6 +108,11 @@ const REBUILD_GROWTH: f32 = 1.5;
 /// Iterations a solve may take beyond [`REBUILD_GROWTH`] times the first, so that a few
 /// iterations more on a short solve do not rebuild.
 const REBUILD_SLACK: u32 = 2;
+
+/// Systems that rebuild the coarse levels each, without trying the last ones, once the
+/// first solve with one-system-old levels took too many iterations. Then one system tries
+/// them again, so a sheet that comes to rest goes back to keeping its levels.
+const REBUILD_RUN: u32 = 32;
 
 /// The structure of the levels: which nodes group into which aggregate, and the block
 /// patterns of the prolongators and coarse matrices. Depends only on the finest pattern.
@@ -428,12 +435,16 @@ pub struct Multigrid {
     matrices: Vec<BlockMatrix>,
     /// The coarsest level's direct solver.
     coarsest: CoarsestSolver,
-    /// Whether the coarse levels are stale: none built yet, or the last solve with them
-    /// took too many iterations.
+    /// Whether the next system rebuilds the coarse levels: none built yet, the last solve
+    /// with them took too many iterations, or a run of rebuilds is on.
     rebuild: bool,
     /// Iterations of the first solve after the coarse levels were built; `None` until
     /// that solve reports.
     fresh_iterations: Option<u32>,
+    /// Solves with the current levels after the first.
+    stale_solves: u32,
+    /// Systems still to rebuild in the run of [`REBUILD_RUN`].
+    rebuilds_ahead: u32,
 }
 
 /// The coarsest level's solver: dense Cholesky, or, where the coarsening stalled above
@@ -841,14 +852,23 @@ impl Multigrid {
 
     /// Takes the iterations the solve preconditioned by the current levels needed, and
     /// marks the coarse levels stale once they need [`REBUILD_GROWTH`] times more than
-    /// when they were new.
+    /// when they were new. If they needed that already in the system after they were
+    /// built, levels one system old cost more than building new ones (at a frame-sized
+    /// step a swinging sheet turns its aggregates enough that their old rigid motions are
+    /// stiff: on the 256² hang scene 13 iterations with new levels, 45 to 75 with the last
+    /// step's), so the next [`REBUILD_RUN`] systems rebuild without trying.
     pub fn record(&mut self, iterations: u32) {
-        match self.fresh_iterations {
-            None => self.fresh_iterations = Some(iterations),
-            Some(fresh) => {
-                self.rebuild = iterations as f32 > REBUILD_GROWTH * fresh as f32 + REBUILD_SLACK as f32;
-            }
+        let Some(fresh) = self.fresh_iterations else {
+            self.fresh_iterations = Some(iterations);
+            self.rebuild = self.rebuilds_ahead > 0;
+            self.rebuilds_ahead = self.rebuilds_ahead.saturating_sub(1);
+            return;
+        };
+        self.rebuild = iterations as f32 > REBUILD_GROWTH * fresh as f32 + REBUILD_SLACK as f32;
+        if self.rebuild && self.stale_solves == 0 {
+            self.rebuilds_ahead = REBUILD_RUN;
         }
+        self.stale_solves += 1;
     }
 
     /// Builds the levels' smoothers, prolongators and matrices, and the coarsest factor.
@@ -862,6 +882,7 @@ impl Multigrid {
     ) {
         self.rebuild = false;
         self.fresh_iterations = None;
+        self.stale_solves = 0;
         let depth = hierarchy.coarsenings.len();
         self.levels.resize_with(depth, Level::default);
         self.matrices.resize_with(depth, BlockMatrix::default);
