@@ -479,6 +479,11 @@ struct Rigid<'a> {
 }
 
 impl Rigid<'_> {
+    /// The aggregate of `node`.
+    fn aggregate(&self, node: usize) -> u32 {
+        self.coarsening.aggregate[if self.coarsening.paired { node / 2 } else { node }]
+    }
+
     /// Block `(node, column)` of `P₀`, `None` where the node is not in the column's
     /// aggregate. A point `p` of aggregate `J` (centre `c`, frame `B`) moves by `t` under
     /// node `2J` and by `B a × (p − c)` under `2J + 1`; a rotation node below the finest
@@ -569,37 +574,44 @@ impl Operator<'_> {
     }
 }
 
-/// Zeroes the blocks of `pattern` and lets `row(i, columns, blocks)` fill each row `i`
-/// (its sorted `columns` and their `blocks`), rows in parallel. Row by row, a product of
-/// sparse matrices walks its operands' rows once (Gustavson's order) instead of searching
-/// for each block of the result; each block still sums its terms in one fixed order.
-fn fill_rows(pattern: &BlockPattern, blocks: &mut Vec<Mat3>, row: impl Fn(usize, &[u32], &mut [Mat3]) + Sync) {
+/// Zeroes the blocks of `pattern` and lets `group(i, columns, blocks)` fill each group of
+/// `size` rows from row `i` (their `blocks`, row after row, and the sorted `columns` they
+/// share), groups in parallel. Row by row, a product of sparse matrices walks its
+/// operands' rows once (Gustavson's order) instead of searching for each block of the
+/// result; each block still sums its terms in one fixed order.
+fn fill_rows(
+    pattern: &BlockPattern,
+    size: usize,
+    blocks: &mut Vec<Mat3>,
+    group: impl Fn(usize, &[u32], &mut [Mat3]) + Sync,
+) {
     blocks.clear();
     blocks.resize(pattern.columns.len(), Mat3::ZERO);
-    fill_row_range(pattern, 0..pattern.rows(), blocks, &row);
+    fill_row_range(pattern, size, 0..pattern.rows(), blocks, &group);
 }
 
-/// [`fill_rows`] over `rows`, whose blocks are `blocks`: halves in parallel down to
-/// [`PARALLEL_MIN_LEN`] blocks.
+/// [`fill_rows`] over `rows` (whole groups of `size`), whose blocks are `blocks`: halves
+/// in parallel down to [`PARALLEL_MIN_LEN`] blocks.
 fn fill_row_range(
     pattern: &BlockPattern,
+    size: usize,
     rows: std::ops::Range<usize>,
     blocks: &mut [Mat3],
-    row: &(impl Fn(usize, &[u32], &mut [Mat3]) + Sync),
+    group: &(impl Fn(usize, &[u32], &mut [Mat3]) + Sync),
 ) {
     let first = pattern.offsets[rows.start] as usize;
-    if blocks.len() <= PARALLEL_MIN_LEN || rows.len() < 2 {
-        for i in rows {
-            let slots = pattern.slots(i);
-            row(i, &pattern.columns[slots.clone()], &mut blocks[slots.start - first..slots.end - first]);
+    if blocks.len() <= PARALLEL_MIN_LEN || rows.len() <= size {
+        for i in rows.step_by(size) {
+            let slots = pattern.slots_of(i..i + size);
+            group(i, pattern.row(i), &mut blocks[slots.start - first..slots.end - first]);
         }
         return;
     }
-    let middle = rows.start + rows.len() / 2;
+    let middle = rows.start + rows.len() / (2 * size) * size;
     let (left, right) = blocks.split_at_mut(pattern.offsets[middle] as usize - first);
     rayon::join(
-        || fill_row_range(pattern, rows.start..middle, left, row),
-        || fill_row_range(pattern, middle..rows.end, right, row),
+        || fill_row_range(pattern, size, rows.start..middle, left, group),
+        || fill_row_range(pattern, size, middle..rows.end, right, group),
     );
 }
 
@@ -695,29 +707,43 @@ impl Level {
     }
 
     /// The filtered smoothed prolongator `S (I − ω D⁻¹ A) P₀`, `P₀` the aggregates' rigid
-    /// motions: block `(i, C)` is `S_i P₀_iC − ω D_i⁻¹ S_i Σ_k A_ik S_k P₀_kC`.
+    /// motions: block `(i, C)` is `S_i P₀_iC − ω D_i⁻¹ S_i Σ_k A_ik S_k P₀_kC`. The rows of
+    /// a pair of nodes share their columns (both nodes of each neighbouring aggregate), and
+    /// `D⁻¹` couples them, so a pair's rows are formed together. Row `i` of `A S P₀` is
+    /// one walk of `A`'s row: a node `k` reaches the two columns of its own aggregate.
     fn prolongator(&mut self, a: Operator, coarsening: &Coarsening, points: Points) {
         let Level { inverse, weight, centres, frames, prolongation, .. } = self;
         let (weight, rigid) = (*weight, Rigid { coarsening, points, centres, frames });
-        // Row `i` of `A S P₀` in column `coarse`.
-        let pushed = |i: usize, coarse: u32| {
-            let mut sum = Mat3::ZERO;
+        let size = if coarsening.paired { 2 } else { 1 };
+        // Row `i` of `A S P₀` into `pushed`, the blocks of `columns`.
+        let push = |i: usize, columns: &[u32], pushed: &mut [Mat3]| {
+            pushed.fill(Mat3::ZERO);
             for k in a.pattern.slots(i) {
-                let column = a.pattern.columns[k] as usize;
-                if let Some(block) = rigid.block(column, coarse) {
-                    sum += a.matrix.blocks[k] * (a.filter(column) * block);
+                let node = a.pattern.columns[k] as usize;
+                let translation = 2 * rigid.aggregate(node);
+                let Ok(at) = columns.binary_search(&translation) else { continue };
+                for (column, out) in (translation..).zip(&mut pushed[at..at + 2]) {
+                    if let Some(block) = rigid.block(node, column) {
+                        *out += a.matrix.blocks[k] * (a.filter(node) * block);
+                    }
                 }
             }
-            sum
         };
-        fill_rows(&coarsening.prolongation, &mut prolongation.blocks, |i, columns, blocks| {
-            for (&coarse, out) in columns.iter().zip(blocks) {
-                let mut smoothed = inverse.own[i] * pushed(i, coarse);
-                if let Some(partner) = inverse.partner.get(i) {
-                    smoothed += *partner * pushed(i ^ 1, coarse);
+        fill_rows(&coarsening.prolongation, size, &mut prolongation.blocks, |first, columns, blocks| {
+            for (r, row) in blocks.chunks_mut(columns.len()).enumerate() {
+                push(first + r, columns, row);
+            }
+            for (s, &coarse) in columns.iter().enumerate() {
+                let pushed = [blocks[s], blocks.get(columns.len() + s).copied().unwrap_or(Mat3::ZERO)];
+                for r in 0..size {
+                    let i = first + r;
+                    let mut smoothed = inverse.own[i] * pushed[r];
+                    if let Some(partner) = inverse.partner.get(i) {
+                        smoothed += *partner * pushed[1 - r];
+                    }
+                    let own = rigid.block(i, coarse).map_or(Mat3::ZERO, |block| a.filter(i) * block);
+                    blocks[r * columns.len() + s] = own - weight * smoothed;
                 }
-                let own = rigid.block(i, coarse).map_or(Mat3::ZERO, |block| a.filter(i) * block);
-                *out = own - weight * smoothed;
             }
         });
     }
@@ -739,7 +765,7 @@ impl Level {
             let rows = chunk_rows(chunk);
             let blocks = &mut blocks[..ap.slots_of(rows.clone()).len()];
             blocks.fill(Mat3::ZERO);
-            fill_row_range(ap, rows, blocks, &|i, columns, blocks| {
+            fill_row_range(ap, 1, rows, blocks, &|i, columns, blocks| {
                 for k in a.pattern.slots(i) {
                     let (block, node) = (a.matrix.blocks[k], a.pattern.columns[k] as usize);
                     let mut at = 0;
