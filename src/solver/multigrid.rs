@@ -479,9 +479,14 @@ struct Rigid<'a> {
 }
 
 impl Rigid<'_> {
+    /// The point of `node`: the particle itself, or a pair's point below the finest level.
+    fn point(&self, node: usize) -> usize {
+        if self.coarsening.paired { node / 2 } else { node }
+    }
+
     /// The aggregate of `node`.
     fn aggregate(&self, node: usize) -> u32 {
-        self.coarsening.aggregate[if self.coarsening.paired { node / 2 } else { node }]
+        self.coarsening.aggregate[self.point(node)]
     }
 
     /// Block `(node, column)` of `P₀`, `None` where the node is not in the column's
@@ -489,15 +494,13 @@ impl Rigid<'_> {
     /// node `2J` and by `B a × (p − c)` under `2J + 1`; a rotation node below the finest
     /// level turns by its own frame's share of `B a`.
     fn block(&self, node: usize, column: u32) -> Option<Mat3> {
-        let paired = self.coarsening.paired;
-        let point = if paired { node / 2 } else { node };
-        let aggregate = self.coarsening.aggregate[point];
+        let (point, aggregate) = (self.point(node), self.aggregate(node));
         if column / 2 != aggregate {
             return None;
         }
         let rotation = column % 2 == 1;
         let (centre, frame) = (self.centres[aggregate as usize], self.frames[aggregate as usize]);
-        Some(match (paired && node % 2 == 1, rotation) {
+        Some(match (self.coarsening.paired && node % 2 == 1, rotation) {
             (false, false) => Mat3::IDENTITY,
             (false, true) => skew(centre - self.points.position[point]) * frame,
             (true, false) => Mat3::ZERO,
