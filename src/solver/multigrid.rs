@@ -441,8 +441,8 @@ pub struct Multigrid {
     /// Iterations of the first solve after the coarse levels were built; `None` until
     /// that solve reports.
     fresh_iterations: Option<u32>,
-    /// Solves with the current levels after the first.
-    stale_solves: u32,
+    /// Whether a solve after the first has used the current levels.
+    tried_stale: bool,
     /// Systems still to rebuild in the run of [`REBUILD_RUN`].
     rebuilds_ahead: u32,
 }
@@ -894,10 +894,10 @@ impl Multigrid {
             return;
         };
         self.rebuild = iterations as f32 > REBUILD_GROWTH * fresh as f32 + REBUILD_SLACK as f32;
-        if self.rebuild && self.stale_solves == 0 {
+        if self.rebuild && !self.tried_stale {
             self.rebuilds_ahead = REBUILD_RUN;
         }
-        self.stale_solves += 1;
+        self.tried_stale = true;
     }
 
     /// Builds the levels' smoothers, prolongators and matrices, and the coarsest factor.
@@ -911,7 +911,7 @@ impl Multigrid {
     ) {
         self.rebuild = false;
         self.fresh_iterations = None;
-        self.stale_solves = 0;
+        self.tried_stale = false;
         let depth = hierarchy.coarsenings.len();
         self.levels.resize_with(depth, Level::default);
         self.matrices.resize_with(depth, BlockMatrix::default);
