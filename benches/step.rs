@@ -138,6 +138,7 @@ fn kernels(c: &mut Criterion) {
                 free_inv_mass: &topology.free_inv_mass,
                 scratch: &mut scratch,
                 self_collision: false,
+                contact_springs: &[],
             };
             let mut ws = IntegratorWorkspace::default();
             ws.resize(count);

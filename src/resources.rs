@@ -10,6 +10,7 @@ use rapier3d::prelude::PhysicsWorld;
 use crate::builders::pins::PinSelection;
 use crate::builders::tear::Cut;
 use crate::collision::self_contact::{ContactMesh, SelfContactReport, SelfContactSolver};
+use crate::solver::contact_springs::ContactSpring;
 use crate::solver::forces::Air;
 use crate::solver::integrate::{Integrator, MethodSettings};
 use crate::solver::probes::ClothProbe;
@@ -167,6 +168,8 @@ pub struct ClothContacts {
     pub velocity: Vec<Vec3>,
     /// Sums over the steps of the current frame.
     pub frame: SelfContactReport,
+    /// The springs of the next step, numbered over the whole mesh.
+    pub springs: Vec<ContactSpring>,
 }
 
 /// The rigid-body world of the scene's props (rapier3d), with stand-ins for its colliders;

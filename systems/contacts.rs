@@ -8,11 +8,12 @@ use crate::collision::collider::{ColliderMotion, ColliderState};
 use crate::collision::features::{ClothSurface, FeatureScratch};
 use crate::collision::self_contact::{ContactMesh, SelfContactReport, SelfContactSolver};
 use crate::components::{
-    Cloth, ClothMaterial, ClothTopology, Collider, ContactStats, Particles, Prop, SelfCollision, SolverWorkspace,
-    Touching, Triangles,
+    Cloth, ClothMaterial, ClothTopology, Collider, ContactStats, Particles, Prop, SelfCollision, SelfTouching,
+    SolverWorkspace, Touching, Triangles,
 };
-use crate::resources::{ClothContacts, PropWorld, SimClock, StepSettings};
+use crate::resources::{ClothContacts, PropWorld, SimClock, SolverSettings, StepSettings};
 use crate::schedule::{FrameSystems, SimSchedules, SubstepSystems};
+use crate::solver::contact_springs::ContactSpring;
 
 /// Resolves every cloth's contacts with every collider at the end of the step (the
 /// colliders where they are then), and adds what they did to the cloth's
@@ -135,6 +136,7 @@ pub struct BodyBuffers {
 /// [`SubstepSystems::SelfContacts`].
 pub fn collide_cloths(
     settings: Res<StepSettings>,
+    solver_settings: Res<SolverSettings>,
     mut contacts: ResMut<ClothContacts>,
     mut cloths: Query<(
         Entity,
@@ -144,6 +146,7 @@ pub fn collide_cloths(
         &SolverWorkspace,
         &Touching,
         &SelfCollision,
+        &mut SelfTouching,
     )>,
 ) {
     let contacts = &mut *contacts;
@@ -153,7 +156,7 @@ pub fn collide_cloths(
     }
     if !members().eq(contacts.members.iter().copied()) {
         let mut mesh = ContactMesh::default();
-        for (_, particles, triangles, topology, _, _, collision) in &cloths {
+        for (index, (_, particles, triangles, topology, _, _, collision, _)) in cloths.iter().enumerate() {
             let offset = mesh.half_gap.len() as u32;
             mesh.triangles.extend(triangles.indices.iter().map(|t| t.map(|k| k + offset)));
             // Each cloth's edges are sorted and numbered above the last cloth's, so the
@@ -162,19 +165,21 @@ pub fn collide_cloths(
             mesh.half_gap.extend(std::iter::repeat_n(0.5 * collision.separation, particles.len()));
             mesh.friction.extend(std::iter::repeat_n(collision.friction, particles.len()));
             mesh.layer.extend(std::iter::repeat_n(collision.layer, particles.len()));
+            mesh.cloth.extend(std::iter::repeat_n(index as u32, particles.len()));
         }
         contacts.mesh = mesh;
         // A new mesh may start tangled: the solver starts over, looking for crossings.
         contacts.solver = SelfContactSolver::default();
         contacts.members = members().collect();
     }
-    let ClothContacts { mesh, solver, start, end, velocity, frame, .. } = contacts;
+    let ClothContacts { mesh, solver, start, end, velocity, frame, springs, .. } = contacts;
+    mesh.springs = solver_settings.integrator.solves_contact_springs(&solver_settings.method);
     start.clear();
     end.clear();
     velocity.clear();
     mesh.inv_mass.clear();
     mesh.impulse_inv_mass.clear();
-    for (_, particles, _, topology, workspace, touching, _) in &cloths {
+    for (_, particles, _, topology, workspace, touching, ..) in &cloths {
         // Particles resting on a body are infinitely heavy to impulses: cloth falling on
         // them must not push them into the body.
         let offset = mesh.inv_mass.len();
@@ -189,11 +194,21 @@ pub fn collide_cloths(
     }
     let report = solver.resolve(mesh, settings.dt, start, end, velocity);
     frame.add(&report);
+    solver.springs(mesh, settings.dt, start, end, velocity, springs);
     let mut offset = 0;
-    for (_, mut particles, ..) in &mut cloths {
+    for (_, mut particles, .., mut touching) in &mut cloths {
         let range = offset..offset + particles.len();
         particles.position.copy_from_slice(&end[range.clone()]);
-        particles.velocity.copy_from_slice(&velocity[range]);
+        particles.velocity.copy_from_slice(&velocity[range.clone()]);
+        // A spring's vertices are all of one cloth (the only ones its implicit step sees).
+        let within = |s: &&ContactSpring| range.contains(&(s.vertices[0] as usize));
+        touching.0.clear();
+        touching.0.extend(
+            springs
+                .iter()
+                .filter(within)
+                .map(|s| ContactSpring { vertices: s.vertices.map(|k| k - offset as u32), ..*s }),
+        );
         offset += particles.len();
     }
 }

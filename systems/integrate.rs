@@ -5,7 +5,7 @@ use glam::Vec3;
 
 use super::forces::{ForceElements, ForceEnvironment};
 use crate::collision::coupling::PropCoupling;
-use crate::components::{Cloth, Collider, Particles, Prop, SelfCollision, SolverWorkspace, Touching};
+use crate::components::{Cloth, Collider, Particles, Prop, SelfCollision, SelfTouching, SolverWorkspace, Touching};
 use crate::resources::{HealthProblem, HealthReport, IntegratorStats, SolverSettings, StepSettings};
 use crate::schedule::{SimSchedules, SubstepSystems};
 use crate::solver::cfl::cfl_step;
@@ -23,11 +23,19 @@ pub fn integrate_cloths(
     environment: ForceEnvironment,
     mut stats: ResMut<IntegratorStats>,
     mut health: ResMut<HealthReport>,
-    mut cloths: Query<(&Cloth, &mut Particles, ForceElements, &Touching, &mut SolverWorkspace, Has<SelfCollision>)>,
+    mut cloths: Query<(
+        &Cloth,
+        &mut Particles,
+        ForceElements,
+        &Touching,
+        &mut SolverWorkspace,
+        Has<SelfCollision>,
+        Option<&SelfTouching>,
+    )>,
     mut colliders: Query<(&Collider, Option<&mut Prop>)>,
     mut props: Local<PropCoupling>,
 ) {
-    for (index, (cloth, mut particles, elements, touching, mut workspace, self_collision)) in
+    for (index, (cloth, mut particles, elements, touching, mut workspace, self_collision, self_touching)) in
         cloths.iter_mut().enumerate()
     {
         let SolverWorkspace { integrator, forces, support, constraints, .. } = &mut *workspace;
@@ -62,8 +70,13 @@ pub fn integrate_cloths(
         };
         let h = settings.dt / splits as f32;
         let model = environment.model(&particles.inv_mass, elements);
-        let mut dynamics =
-            ClothDynamics { model, free_inv_mass: &topology.free_inv_mass, scratch: forces, self_collision };
+        let mut dynamics = ClothDynamics {
+            model,
+            free_inv_mass: &topology.free_inv_mass,
+            scratch: forces,
+            self_collision,
+            contact_springs: self_touching.map_or(&[], |s| &s.0),
+        };
         let mut result = Ok(StepReport::default());
         for split in 0..splits {
             let t = environment.time() + split as f32 * h;

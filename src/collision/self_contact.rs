@@ -31,6 +31,7 @@ use super::bvh::{Aabb, Bvh};
 use super::primitives::{Sweep, closest_between_segments, closest_on_triangle};
 use super::untangle::Untangler;
 use crate::solver::PARALLEL_MIN_LEN;
+use crate::solver::contact_springs::ContactSpring;
 use crate::solver::elements::spring::outer;
 use crate::solver::gather::Gather;
 
@@ -55,6 +56,11 @@ pub struct ContactMesh {
     /// Each vertex's layer: a higher layer belongs on the side of a lower layer's
     /// triangle normals, which is how untangling knows which side is wrong.
     pub layer: Vec<u32>,
+    /// Each vertex's cloth (its place among the cloths of the mesh).
+    pub cloth: Vec<u32>,
+    /// Whether the cloths' implicit steps hold their own close pairs apart with
+    /// [`ContactSpring`]s ([`SelfContactSolver::springs`]).
+    pub springs: bool,
 }
 
 impl ContactMesh {
@@ -83,6 +89,14 @@ impl ContactMesh {
 
 /// Fraction of the missing gap a proximity impulse restores in one step.
 const GAP_RECOVERY: f32 = 0.25;
+/// Fraction of the missing gap the contact springs of the next implicit step restore in
+/// it, of a pair at rest with no other force: `k h² / (m + k h²)` under implicit Euler.
+const SPRING_RECOVERY: f32 = 0.95;
+/// `k h² / m` of the contact springs.
+const SPRING_RATIO: f32 = SPRING_RECOVERY / (1.0 - SPRING_RECOVERY);
+/// Relative tangential speed below which a contact spring's friction holds like a stiff
+/// damper rather than Coulomb's constant force [m/s].
+const STATIC_SPEED: f32 = 1e-3;
 /// Gap, as a fraction of δ, a continuous-collision impulse leaves between a pair.
 const IMPACT_GAP: f32 = 0.1;
 /// Passes of continuous collision before impact zones take over.
@@ -185,6 +199,7 @@ pub struct SelfContactSolver {
     /// Per-task buffers for gathering pairs and contacts without allocating.
     pair_gather: Gather<Pair>,
     contact_gather: Gather<Contact>,
+    spring_gather: Gather<ContactSpring>,
 }
 
 impl SelfContactSolver {
@@ -296,6 +311,30 @@ impl SelfContactSolver {
             self.untangler.watch();
         }
         report
+    }
+
+    /// Lists in `springs` the pairs closer than their separation at `x1`, where the step
+    /// from `x0` that [`SelfContactSolver::resolve`] just made free of crossings ended
+    /// (with velocities `v`) and the next step of length `h` starts: the springs that hold
+    /// them apart in it.
+    pub fn springs(
+        &mut self,
+        mesh: &ContactMesh,
+        h: f32,
+        x0: &[Vec3],
+        x1: &[Vec3],
+        v: &[Vec3],
+        springs: &mut Vec<ContactSpring>,
+    ) {
+        springs.clear();
+        if !mesh.springs || mesh.triangles.is_empty() || h <= 0.0 {
+            return;
+        }
+        if !self.candidates_cover(mesh, x1) {
+            self.candidates(mesh, x0, x1);
+        }
+        let pairs = &self.pairs;
+        self.spring_gather.run(pairs.len(), springs, |i, out| out.extend(spring(mesh, pairs[i], h, x1, v)));
     }
 
     /// How much the trees' boxes are grown: the largest separation of a pair.
@@ -497,12 +536,22 @@ fn pair_gap_and_friction(mesh: &ContactMesh, pair: Pair) -> (f32, f32) {
     (g1 + g2, 0.5 * (m1 + m2))
 }
 
-/// The proximity contact of a pair at the start of the step, if it is closer than its
-/// separation: the impulse will make its normal velocity restore [`GAP_RECOVERY`] of the
-/// missing gap over the step.
-fn proximity(mesh: &ContactMesh, pair: Pair, h: f32, x0: &[Vec3]) -> Option<Contact> {
+/// A pair closer than its separation.
+struct Close {
+    stencil: Stencil,
+    /// Unit normal from the second side to the first.
+    normal: Vec3,
+    /// The separation δ [m].
+    gap: f32,
+    /// The distance between the closest points [m].
+    distance: f32,
+    friction: f32,
+}
+
+/// The pair at `x`, if it is closer than its separation.
+fn close(mesh: &ContactMesh, pair: Pair, x: &[Vec3]) -> Option<Close> {
     let vertices = pair_vertices(mesh, pair);
-    let [p, a, b, c] = vertices.map(|k| x0[k as usize]);
+    let [p, a, b, c] = vertices.map(|k| x[k as usize]);
     let (stencil, fallback) = match pair {
         Pair::PointTriangle(_, t) => {
             let w = closest_on_triangle(p, a, b, c);
@@ -515,7 +564,7 @@ fn proximity(mesh: &ContactMesh, pair: Pair, h: f32, x0: &[Vec3]) -> Option<Cont
         }
     };
     let (gap, friction) = pair_gap_and_friction(mesh, pair);
-    let offset = stencil.relative(x0);
+    let offset = stencil.relative(x);
     let distance = offset.length();
     if distance >= gap {
         return None;
@@ -526,7 +575,44 @@ fn proximity(mesh: &ContactMesh, pair: Pair, h: f32, x0: &[Vec3]) -> Option<Cont
         let n = fallback.try_normalize()?;
         if n.dot(offset) < 0.0 { -n } else { n }
     };
+    Some(Close { stencil, normal, gap, distance, friction })
+}
+
+/// Whether the implicit step held `pair` apart with a spring: the mesh's cloths solve
+/// with springs and the pair lies within one cloth.
+fn sprung(mesh: &ContactMesh, pair: Pair) -> bool {
+    let vertices = pair_vertices(mesh, pair);
+    mesh.springs && vertices.iter().all(|&k| mesh.cloth[k as usize] == mesh.cloth[vertices[0] as usize])
+}
+
+/// The proximity contact of a pair at the start of the step, if it is closer than its
+/// separation: the impulse will make its normal velocity restore [`GAP_RECOVERY`] of the
+/// missing gap over the step.
+fn proximity(mesh: &ContactMesh, pair: Pair, h: f32, x0: &[Vec3]) -> Option<Contact> {
+    let Close { stencil, normal, gap, distance, friction } = close(mesh, pair, x0)?;
     Some(Contact { stencil, normal, target: GAP_RECOVERY * (gap - distance) / h, friction })
+}
+
+/// The spring that holds a pair closer than its separation at `x` apart in the next
+/// implicit step (see [`ContactSpring`]), if the pair is within one cloth and any of its
+/// vertices is free. Stiff enough to restore [`SPRING_RECOVERY`] of the missing gap
+/// within a step of length `h` on its own: `k = r m / h²` for the pair's effective mass
+/// `m = 1 / Σ (w² / m_k)`. Its friction is Coulomb's, lagged (as in IPC): the push at `x`
+/// times μ over the pair's tangential speed at `v`, or over [`STATIC_SPEED`] if slower.
+fn spring(mesh: &ContactMesh, pair: Pair, h: f32, x: &[Vec3], v: &[Vec3]) -> Option<ContactSpring> {
+    if !sprung(mesh, pair) {
+        return None;
+    }
+    let Close { stencil, normal, gap, distance, friction } = close(mesh, pair, x)?;
+    let Stencil { vertices, weights } = stencil;
+    let inv_mass: f32 = (0..4).map(|k| weights[k] * weights[k] * mesh.inv_mass[vertices[k] as usize]).sum();
+    (inv_mass > 0.0).then(|| {
+        let stiffness = SPRING_RATIO / (inv_mass * h * h);
+        let relative = stencil.relative(v);
+        let sliding = (relative - relative.dot(normal) * normal).length().max(STATIC_SPEED);
+        let drag = friction * stiffness * (gap - distance) / sliding;
+        ContactSpring { vertices, weights, normal, gap, stiffness, drag }
+    })
 }
 
 /// The continuous collision of a pair between `x0` and `x1`, if their paths touch: the
@@ -622,6 +708,8 @@ mod tests {
             half_gap: vec![0.005; 8],
             friction: vec![0.0; 8],
             layer: vec![0; 8],
+            cloth: vec![0; 8],
+            springs: false,
         };
         (mesh, x)
     }
@@ -707,6 +795,8 @@ mod tests {
             half_gap: vec![0.0005; x0.len()],
             friction: vec![0.2; x0.len()],
             layer: vec![0; x0.len()],
+            cloth: vec![0; x0.len()],
+            springs: false,
             triangles,
         };
         let mut v: Vec<Vec3> = (0..x0.len())

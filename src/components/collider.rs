@@ -8,6 +8,7 @@ use parry3d::shape::SharedShape;
 use crate::collision::body_contact::{ContactTotals, Touch};
 use crate::collision::collider::{ColliderMotion, ContactResponse};
 use crate::collision::features::SharpFeatures;
+use crate::solver::contact_springs::ContactSpring;
 
 /// A static or kinematic solid body (E5, D11, B5): a parry3d shape that moves along its
 /// motion. Its own entity.
@@ -62,6 +63,12 @@ impl std::fmt::Debug for Collider {
 #[derive(Component, Debug, Clone, Default, PartialEq)]
 pub struct Touching(pub Vec<Touch>);
 
+/// The pairs of a self-colliding cloth that the last step left closer than their
+/// separation, as the springs that hold them apart in the next implicit step (the
+/// cloth's particle numbers). Pairs with another cloth are left to the contact stage.
+#[derive(Component, Debug, Clone, Default, PartialEq)]
+pub struct SelfTouching(pub Vec<ContactSpring>);
+
 /// Contact of one cloth with the bodies, summed over the steps of the current frame.
 #[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
 pub struct ContactStats(pub ContactTotals);
@@ -69,6 +76,7 @@ pub struct ContactStats(pub ContactTotals);
 /// A cloth that collides with itself and with every other cloth that has this component
 /// (E3, Z5): the pairs keep `separation` apart between mid-surfaces.
 #[derive(Component, Debug, Clone, Copy, PartialEq)]
+#[require(SelfTouching)]
 pub struct SelfCollision {
     /// Distance kept between two layers' mid-surfaces [m]; a pair of different cloths keeps
     /// the mean of their two separations.

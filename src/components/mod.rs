@@ -14,7 +14,7 @@ mod triangles;
 mod user_forces;
 
 pub use cloth::{BendingDesc, BendingLawDesc, Cloth, ClothMaterial, MembraneDesc, ParticleLayout, SpringCoefficients};
-pub use collider::{Collider, ContactStats, SelfCollision, Touching};
+pub use collider::{Collider, ContactStats, SelfCollision, SelfTouching, Touching};
 pub use elements::{BendingHinges, MembraneTriangles, StrainLimit};
 pub use particles::Particles;
 pub use pins::{Grip, Grips, Pins};

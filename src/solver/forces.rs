@@ -5,6 +5,7 @@ use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
 use super::PARALLEL_MIN_LEN;
+use super::contact_springs::ContactSpring;
 use super::descent::Colouring;
 use super::elements::hinge::hinge_angle;
 use super::elements::{BlockMatrix, BlockPattern, SpringElement, VelocityJacobian};
@@ -335,6 +336,8 @@ pub struct ClothDynamics<'a> {
     pub scratch: &'a mut ForceScratch,
     /// Whether the cloth collides with itself, which bounds block descent's iterations.
     pub self_collision: bool,
+    /// The cloth–cloth contacts the implicit step holds apart.
+    pub contact_springs: &'a [ContactSpring],
 }
 
 impl Dynamics for ClothDynamics<'_> {
@@ -370,6 +373,10 @@ impl LinearDynamics for ClothDynamics<'_> {
 
     fn hierarchy(&self) -> &Hierarchy {
         &self.model.topology.hierarchy
+    }
+
+    fn contact_springs(&self) -> &[ContactSpring] {
+        self.contact_springs
     }
 
     fn linearize(

@@ -22,6 +22,7 @@ use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
 use super::PARALLEL_MIN_LEN;
+use super::contact_springs::{self, Blocks, ContactSpring, Weights};
 use super::descent::{BoundedMotion, Colouring, DescentSettings, DescentWorkspace, descend};
 use super::elements::spring::outer;
 use super::elements::{BlockMatrix, BlockPattern, VelocityJacobian};
@@ -99,6 +100,10 @@ pub trait LinearDynamics: Dynamics {
     fn contact_surface(&self) -> Option<Surface<'_>> {
         None
     }
+    /// The cloth–cloth contacts the step holds apart with springs in the solve.
+    fn contact_springs(&self) -> &[ContactSpring] {
+        &[]
+    }
     /// Forces [N] and their semi-definite derivatives at `(x, v, t)`.
     fn linearize(
         &mut self,
@@ -132,6 +137,9 @@ pub struct ImplicitWorkspace {
     x: Vec<Vec3>,
     v: Vec<Vec3>,
     preconditioner: Vec<Mat3>,
+    /// The weights of stiffness (`hβ + h²θ²`) and damping (`h`) in the system, which the
+    /// contact springs' off-diagonal blocks take in each product.
+    spring_weights: Weights,
     /// Per chunk of [`VECTOR_CHUNK`] particles, the partial sums of the CG's dot products.
     partials: Vec<f64>,
     /// Per particle, the directions its Δv may take: identity (free), zero (pinned) or a
@@ -250,6 +258,9 @@ pub fn implicit_step(
     ws.dfdx = std::mem::take(&mut ws.system);
     dynamics.linearize(x, v, t, &mut ws.force, &mut ws.dfdx, &mut ws.dfdv);
     ws.dfdx.multiply(dynamics.pattern(), v, &mut ws.product);
+    let springs = springs_of(settings, dynamics);
+    contact_springs::add_forces(springs, x, v, &mut ws.force);
+    contact_springs::add_product(springs, STIFFNESS, Blocks::All, v, &mut ws.product);
     for i in 0..n {
         ws.start_force[i] = ws.force[i] - alpha * dynamics.mass(i) * v[i] + beta * ws.product[i];
         ws.rhs[i] = h * ws.start_force[i] + h * h * theta * ws.product[i];
@@ -258,7 +269,7 @@ pub fn implicit_step(
     report.iterations += solve(dynamics, settings, Start::Prescribed, x, h * theta, ws);
     ws.constraint_impulses.clear();
     ws.constraint_impulses.resize(constraints.len(), Vec3::ZERO);
-    add_constraint_impulses(dynamics.pattern(), constraints, ws);
+    add_constraint_impulses(dynamics.pattern(), springs_of(settings, dynamics), constraints, ws);
     // Bodies moved by the constraints' impulses: solve again, from the last solution, with
     // the velocities their balance asks for, until they settle.
     if let Some(bodies) = bodies {
@@ -276,7 +287,7 @@ pub fn implicit_step(
             }
             report.iterations += solve(dynamics, settings, Start::Given, x, h * theta, ws);
             ws.constraint_impulses.fill(Vec3::ZERO);
-            add_constraint_impulses(dynamics.pattern(), constraints, ws);
+            add_constraint_impulses(dynamics.pattern(), springs_of(settings, dynamics), constraints, ws);
         }
     }
     ws.dv.copy_from_slice(&ws.delta);
@@ -294,6 +305,11 @@ pub fn implicit_step(
         // 1 rather than θ: D = ∂f/∂v − αM + βK.
         ws.dfdv.multiply(pattern, &ws.dv, &mut ws.residual);
         ws.dfdx.multiply(pattern, &ws.dv, &mut ws.preconditioned);
+        let springs = springs_of(settings, dynamics);
+        contact_springs::add_forces(springs, &ws.x, &ws.v, &mut ws.force);
+        contact_springs::add_product(springs, STIFFNESS, Blocks::All, &ws.v, &mut ws.product);
+        contact_springs::add_product(springs, DAMPING, Blocks::All, &ws.dv, &mut ws.residual);
+        contact_springs::add_product(springs, STIFFNESS, Blocks::All, &ws.dv, &mut ws.preconditioned);
         // −R = h((1−θ)F₀ + θF₁ + (1−θ) D Δv) − M Δv, with F₁ = f₁ − αMv₁ + βKv₁.
         for i in 0..n {
             let mass = dynamics.mass(i);
@@ -304,7 +320,7 @@ pub fn implicit_step(
         }
         build_system(settings, h, dynamics, ws);
         report.iterations += solve(dynamics, settings, Start::Zero, x, h * theta, ws);
-        add_constraint_impulses(dynamics.pattern(), constraints, ws);
+        add_constraint_impulses(dynamics.pattern(), springs_of(settings, dynamics), constraints, ws);
         for i in 0..n {
             ws.dv[i] += ws.delta[i];
         }
@@ -325,7 +341,8 @@ pub fn implicit_step(
 }
 
 /// `A = (1 + hα) M − h D − (hβ + h²θ²) K` from the derivatives in `ws`, in the storage of
-/// ∂f/∂x.
+/// ∂f/∂x, with the diagonal blocks of the contact springs' stiffness (the rest is added in
+/// each product: [`multiply_system`]).
 fn build_system(settings: &ImplicitSettings, h: f32, dynamics: &impl LinearDynamics, ws: &mut ImplicitWorkspace) {
     let (theta, Rayleigh { alpha, beta }) = (settings.theta, settings.rayleigh);
     let pattern = dynamics.pattern();
@@ -333,6 +350,35 @@ fn build_system(settings: &ImplicitSettings, h: f32, dynamics: &impl LinearDynam
     ws.system = std::mem::take(&mut ws.dfdx);
     ws.dfdv.combine_into(-h, k_weight, pattern, &mut ws.system);
     ws.system.add_diagonal(pattern, |i| (1.0 + h * alpha) * dynamics.mass(i));
+    ws.spring_weights = Weights { stiffness: k_weight, drag: h };
+    contact_springs::add_diagonal(springs_of(settings, dynamics), ws.spring_weights, pattern, &mut ws.system);
+}
+
+/// The contact springs' part of `∂f/∂x` and of `∂f/∂v`, as [`Weights`].
+const STIFFNESS: Weights = Weights { stiffness: -1.0, drag: 0.0 };
+const DAMPING: Weights = Weights { stiffness: 0.0, drag: -1.0 };
+
+/// The contact springs the step solves with: none for block descent, which bounds each
+/// vertex's motion instead and whose sweeps see only the matrix.
+fn springs_of<'a>(settings: &ImplicitSettings, dynamics: &'a impl LinearDynamics) -> &'a [ContactSpring] {
+    match settings.linear_solver {
+        LinearSolver::BlockDescent(_) => &[],
+        _ => dynamics.contact_springs(),
+    }
+}
+
+/// `out = A y`: the matrix, and the contact springs' off-diagonal blocks weighted as
+/// stiffness and damping are in `A`.
+fn multiply_system(
+    system: &BlockMatrix,
+    pattern: &BlockPattern,
+    springs: &[ContactSpring],
+    weights: Weights,
+    y: &[Vec3],
+    out: &mut [Vec3],
+) {
+    system.multiply(pattern, y, out);
+    contact_springs::add_product(springs, weights, Blocks::OffDiagonal, y, out);
 }
 
 fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
@@ -341,11 +387,16 @@ fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
 
 /// Adds what each constraint had to supply in the last solve, `A δ − rhs` at its
 /// particle: the body's push that the filter stood in for.
-fn add_constraint_impulses(pattern: &BlockPattern, constraints: &[VelocityConstraint], ws: &mut ImplicitWorkspace) {
+fn add_constraint_impulses(
+    pattern: &BlockPattern,
+    springs: &[ContactSpring],
+    constraints: &[VelocityConstraint],
+    ws: &mut ImplicitWorkspace,
+) {
     if constraints.is_empty() {
         return;
     }
-    ws.system.multiply(pattern, &ws.delta, &mut ws.product);
+    multiply_system(&ws.system, pattern, springs, ws.spring_weights, &ws.delta, &mut ws.product);
     for (impulse, c) in ws.constraint_impulses.iter_mut().zip(constraints) {
         let i = c.particle as usize;
         *impulse += ws.product[i] - ws.rhs[i];
@@ -414,9 +465,12 @@ fn solve(
     }
     let pattern = dynamics.pattern();
     match settings.linear_solver {
-        LinearSolver::ConjugateGradient => conjugate_gradient(pattern, None, settings, x, ws),
+        LinearSolver::ConjugateGradient => {
+            conjugate_gradient(pattern, None, dynamics.contact_springs(), settings, x, ws)
+        }
         LinearSolver::Multigrid => {
-            let iterations = conjugate_gradient(pattern, Some(dynamics.hierarchy()), settings, x, ws);
+            let (hierarchy, springs) = (Some(dynamics.hierarchy()), dynamics.contact_springs());
+            let iterations = conjugate_gradient(pattern, hierarchy, springs, settings, x, ws);
             ws.multigrid.record(iterations);
             iterations
         }
@@ -482,6 +536,7 @@ fn fused(
 fn conjugate_gradient(
     pattern: &BlockPattern,
     hierarchy: Option<&Hierarchy>,
+    springs: &[ContactSpring],
     settings: &ImplicitSettings,
     x: &[Vec3],
     ws: &mut ImplicitWorkspace,
@@ -499,8 +554,10 @@ fn conjugate_gradient(
         partials,
         filter,
         multigrid,
+        spring_weights,
         ..
     } = ws;
+    let weights = *spring_weights;
     match hierarchy {
         Some(hierarchy) => multigrid.prepare(hierarchy, pattern, system, filter, x),
         None => (0..filter.len())
@@ -528,7 +585,7 @@ fn conjugate_gradient(
     };
 
     // r = S (b − A δ), z = M⁻¹ r, d = z.
-    system.multiply(pattern, delta, product);
+    multiply_system(system, pattern, springs, weights, delta, product);
     let mut rr = fused(residual, product, partials, |i, r, q| {
         *r = filter[i] * (rhs[i] - q);
         f64::from(r.length_squared())
@@ -545,7 +602,7 @@ fn conjugate_gradient(
             return iteration;
         }
         // q = S A d, and d·q.
-        system.multiply(pattern, direction, product);
+        multiply_system(system, pattern, springs, weights, direction, product);
         let curvature = fused(product, direction, partials, |i, q, d| {
             *q = filter[i] * *q;
             f64::from(d.dot(*q))

@@ -53,6 +53,14 @@ impl Integrator {
         matches!(self, Integrator::ImplicitEuler | Integrator::Newmark | Integrator::BlockDescent)
     }
 
+    /// Whether its step, with `settings`, holds a self-colliding cloth's close pairs apart
+    /// with springs in the solve ([`super::contact_springs`]): the implicit methods solved
+    /// by conjugate gradients, not block descent, which bounds each vertex's motion instead.
+    pub fn solves_contact_springs(self, settings: &MethodSettings) -> bool {
+        matches!(self, Integrator::ImplicitEuler | Integrator::Newmark)
+            && !matches!(settings.implicit.linear_solver, LinearSolver::BlockDescent(_))
+    }
+
     /// Every integrator, for listings and tests.
     pub const ALL: [Integrator; 10] = [
         Integrator::ExplicitEuler,
