@@ -443,9 +443,10 @@ fn bounding_surface<'a>(settings: &ImplicitSettings, dynamics: &'a impl LinearDy
         .flatten()
 }
 
-/// Solves `system · delta = rhs` within the filters with the settings' linear solver, from
-/// `start`. Block descent keeps each particle within its contact bounds, the particles at
-/// `ws.x + scale · delta` (`scale` = hθ [s]). Returns the iterations (or sweeps) taken.
+/// Solves `A delta = rhs` (the system and the contact springs) within the filters with the
+/// settings' linear solver, from `start`. Block descent keeps each particle within its
+/// contact bounds, the particles at `ws.x + scale · delta` (`scale` = hθ [s]). Returns the
+/// iterations (or sweeps) taken.
 fn solve(
     dynamics: &impl LinearDynamics,
     settings: &ImplicitSettings,
@@ -526,8 +527,9 @@ fn fused(
     total(partials)
 }
 
-/// Solves `system · delta = rhs` within the constraint filters by preconditioned conjugate
-/// gradients (Baraff & Witkin's modified PCG): `delta` starts as given and only moves
+/// Solves `A delta = rhs` within the constraint filters by preconditioned conjugate
+/// gradients (Baraff & Witkin's modified PCG), `A` the system matrix with the `springs`'
+/// off-diagonal blocks ([`multiply_system`]): `delta` starts as given and only moves
 /// within the filters. The preconditioner is a multigrid V-cycle over `hierarchy` if
 /// given, else block Jacobi. Returns the iterations taken. Stops early on a direction of
 /// non-positive curvature, which a semi-definite assembly should not give. The vector work
