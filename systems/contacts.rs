@@ -13,7 +13,7 @@ use crate::components::{
 };
 use crate::resources::{ClothContacts, PropWorld, SimClock, SolverSettings, StepSettings};
 use crate::schedule::{FrameSystems, SimSchedules, SubstepSystems};
-use crate::solver::contact_springs::ContactSpring;
+use crate::solver::contact_springs::{ContactSpring, Stencil};
 
 /// Resolves every cloth's contacts with every collider at the end of the step (the
 /// colliders where they are then), and adds what they did to the cloth's
@@ -201,14 +201,12 @@ pub fn collide_cloths(
         particles.position.copy_from_slice(&end[range.clone()]);
         particles.velocity.copy_from_slice(&velocity[range.clone()]);
         // A spring's vertices are all of one cloth (the only ones its implicit step sees).
-        let within = |s: &&ContactSpring| range.contains(&(s.vertices[0] as usize));
+        let within = |s: &&ContactSpring| range.contains(&(s.stencil.vertices[0] as usize));
         touching.0.clear();
-        touching.0.extend(
-            springs
-                .iter()
-                .filter(within)
-                .map(|s| ContactSpring { vertices: s.vertices.map(|k| k - offset as u32), ..*s }),
-        );
+        touching.0.extend(springs.iter().filter(within).map(|s| {
+            let stencil = Stencil { vertices: s.stencil.vertices.map(|k| k - offset as u32), ..s.stencil };
+            ContactSpring { stencil, ..*s }
+        }));
         offset += particles.len();
     }
 }

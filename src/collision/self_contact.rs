@@ -31,7 +31,7 @@ use super::bvh::{Aabb, Bvh};
 use super::primitives::{Sweep, closest_between_segments, closest_on_triangle};
 use super::untangle::Untangler;
 use crate::solver::PARALLEL_MIN_LEN;
-use crate::solver::contact_springs::ContactSpring;
+use crate::solver::contact_springs::{ContactSpring, Stencil};
 use crate::solver::elements::spring::outer;
 use crate::solver::gather::Gather;
 
@@ -127,28 +127,6 @@ impl SelfContactReport {
         self.zone_rounds += other.zone_rounds;
         self.frozen |= other.frozen;
         self.crossings += other.crossings;
-    }
-}
-
-/// A pair of primitives as four vertices and weights: the pair's relative position (or
-/// velocity) is `Σ weights[k] x[vertices[k]]`, pointing from the second side to the first.
-#[derive(Debug, Clone, Copy)]
-struct Stencil {
-    vertices: [u32; 4],
-    weights: [f32; 4],
-}
-
-impl Stencil {
-    fn point_triangle(p: u32, tri: [u32; 3], w: [f32; 3]) -> Stencil {
-        Stencil { vertices: [p, tri[0], tri[1], tri[2]], weights: [1.0, -w[0], -w[1], -w[2]] }
-    }
-
-    fn edge_edge(e: [u32; 2], f: [u32; 2], s: f32, u: f32) -> Stencil {
-        Stencil { vertices: [e[0], e[1], f[0], f[1]], weights: [1.0 - s, s, u - 1.0, -u] }
-    }
-
-    fn relative(&self, x: &[Vec3]) -> Vec3 {
-        (0..4).map(|k| self.weights[k] * x[self.vertices[k] as usize]).sum()
     }
 }
 
@@ -604,14 +582,13 @@ fn spring(mesh: &ContactMesh, pair: Pair, h: f32, x: &[Vec3], v: &[Vec3]) -> Opt
         return None;
     }
     let Close { stencil, normal, gap, distance, friction } = close(mesh, pair, x)?;
-    let Stencil { vertices, weights } = stencil;
-    let inv_mass: f32 = (0..4).map(|k| weights[k] * weights[k] * mesh.inv_mass[vertices[k] as usize]).sum();
+    let inv_mass = stencil.inverse_mass(&mesh.inv_mass);
     (inv_mass > 0.0).then(|| {
         let stiffness = SPRING_RATIO / (inv_mass * h * h);
         let relative = stencil.relative(v);
         let sliding = (relative - relative.dot(normal) * normal).length().max(STATIC_SPEED);
         let drag = friction * stiffness * (gap - distance) / sliding;
-        ContactSpring { vertices, weights, normal, gap, stiffness, drag }
+        ContactSpring { stencil, normal, gap, stiffness, drag }
     })
 }
 
@@ -661,15 +638,13 @@ fn lerp4(sweep: &Sweep, t: f32) -> [Vec3; 4] {
 /// contact point would then fling a lightly weighted vertex), in which case the true
 /// masses.
 fn apply(contact: &Contact, mesh: &ContactMesh, velocity: &mut [Vec3]) {
-    let Stencil { vertices, weights } = contact.stencil;
-    let relative = contact.stencil.relative(velocity);
+    let stencil = &contact.stencil;
+    let relative = stencil.relative(velocity);
     let normal_speed = relative.dot(contact.normal);
     if normal_speed >= contact.target {
         return;
     }
-    let share_of =
-        |inv_mass: &[f32]| -> f32 { (0..4).map(|k| weights[k] * weights[k] * inv_mass[vertices[k] as usize]).sum() };
-    let (held, free) = (share_of(&mesh.impulse_inv_mass), share_of(&mesh.inv_mass));
+    let (held, free) = (stencil.inverse_mass(&mesh.impulse_inv_mass), stencil.inverse_mass(&mesh.inv_mass));
     let (inv_mass, share) = if held >= 0.25 * free { (&mesh.impulse_inv_mass, held) } else { (&mesh.inv_mass, free) };
     if share <= 0.0 {
         return;
@@ -684,8 +659,8 @@ fn apply(contact: &Contact, mesh: &ContactMesh, velocity: &mut [Vec3]) {
     };
     let change = normal_change * contact.normal + friction_change;
     for k in 0..4 {
-        let vertex = vertices[k] as usize;
-        velocity[vertex] += (weights[k] * inv_mass[vertex] / share) * change;
+        let vertex = stencil.vertices[k] as usize;
+        velocity[vertex] += (stencil.weights[k] * inv_mass[vertex] / share) * change;
     }
 }
 

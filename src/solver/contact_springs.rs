@@ -19,16 +19,46 @@ use glam::{Mat3, Vec3};
 use super::elements::spring::outer;
 use super::elements::{BlockMatrix, BlockPattern};
 
-/// A pair of primitives of one cloth held apart in the implicit step: the pair's relative
-/// position `Σ weights[k] x[vertices[k]]` points from its second side to its first, and
-/// its distance along `normal` is pushed towards `gap`.
+/// A pair of primitives as four vertices and weights: the pair's relative position (or
+/// velocity) is `Σ weights[k] x[vertices[k]]`, pointing from the second side to the first.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ContactSpring {
+pub struct Stencil {
     /// A vertex and a triangle's three, or two edges' two each.
     pub vertices: [u32; 4],
     /// Weights of the vertices in the relative position: 1 and minus the barycentric
     /// weights of the closest point for a vertex and a triangle.
     pub weights: [f32; 4],
+}
+
+impl Stencil {
+    /// Vertex `p` against the point of triangle `tri` at barycentric weights `w`.
+    pub fn point_triangle(p: u32, tri: [u32; 3], w: [f32; 3]) -> Stencil {
+        Stencil { vertices: [p, tri[0], tri[1], tri[2]], weights: [1.0, -w[0], -w[1], -w[2]] }
+    }
+
+    /// The point at `s` along edge `e` against the point at `u` along edge `f`.
+    pub fn edge_edge(e: [u32; 2], f: [u32; 2], s: f32, u: f32) -> Stencil {
+        Stencil { vertices: [e[0], e[1], f[0], f[1]], weights: [1.0 - s, s, u - 1.0, -u] }
+    }
+
+    /// The pair's relative position (or velocity) `Σ w x` at `x`.
+    pub fn relative(&self, x: &[Vec3]) -> Vec3 {
+        (0..4).map(|k| self.weights[k] * x[self.vertices[k] as usize]).sum()
+    }
+
+    /// The pair's inverse effective mass along any direction, `Σ w_k² / m_k`, for the
+    /// vertices' inverse masses `inv_mass` [1/kg].
+    pub fn inverse_mass(&self, inv_mass: &[f32]) -> f32 {
+        (0..4).map(|k| self.weights[k] * self.weights[k] * inv_mass[self.vertices[k] as usize]).sum()
+    }
+}
+
+/// A pair of primitives of one cloth held apart in the implicit step: its distance along
+/// `normal` is pushed towards `gap`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactSpring {
+    /// The pair.
+    pub stencil: Stencil,
     /// Unit normal from the second side to the first at the start of the step.
     pub normal: Vec3,
     /// The separation the pair keeps [m].
@@ -41,16 +71,11 @@ pub struct ContactSpring {
 }
 
 impl ContactSpring {
-    /// The pair's relative position (or velocity) `Σ w x` at `x`.
-    fn relative(&self, x: &[Vec3]) -> Vec3 {
-        (0..4).map(|k| self.weights[k] * x[self.vertices[k] as usize]).sum()
-    }
-
     /// The force on the pair's first side at `(x, v)`: the spring's push, `k (gap − d) n`,
     /// and friction, `−c (I − n nᵀ) v_rel`. Vertex `k` takes `w_k` times it.
     fn force(&self, x: &[Vec3], v: &[Vec3]) -> Vec3 {
-        let velocity = self.relative(v);
-        self.stiffness * (self.gap - self.relative(x).dot(self.normal)) * self.normal
+        let velocity = self.stencil.relative(v);
+        self.stiffness * (self.gap - self.stencil.relative(x).dot(self.normal)) * self.normal
             - self.drag * (velocity - velocity.dot(self.normal) * self.normal)
     }
 }
@@ -60,7 +85,7 @@ pub fn add_forces(springs: &[ContactSpring], x: &[Vec3], v: &[Vec3], force: &mut
     for s in springs {
         let push = s.force(x, v);
         for k in 0..4 {
-            force[s.vertices[k] as usize] += s.weights[k] * push;
+            force[s.stencil.vertices[k] as usize] += s.stencil.weights[k] * push;
         }
     }
 }
@@ -97,11 +122,11 @@ impl ContactSpring {
 pub fn add_product(springs: &[ContactSpring], weights: Weights, blocks: Blocks, y: &[Vec3], out: &mut [Vec3]) {
     for s in springs {
         let block = s.block(weights);
-        let total = s.relative(y);
+        let total = s.stencil.relative(y);
         for k in 0..4 {
-            let i = s.vertices[k] as usize;
-            let others = if blocks == Blocks::OffDiagonal { total - s.weights[k] * y[i] } else { total };
-            out[i] += s.weights[k] * (block * others);
+            let i = s.stencil.vertices[k] as usize;
+            let others = if blocks == Blocks::OffDiagonal { total - s.stencil.weights[k] * y[i] } else { total };
+            out[i] += s.stencil.weights[k] * (block * others);
         }
     }
 }
@@ -111,7 +136,8 @@ pub fn add_diagonal(springs: &[ContactSpring], weights: Weights, pattern: &Block
     for s in springs {
         let block = s.block(weights);
         for k in 0..4 {
-            matrix.blocks[pattern.diagonal_slot(s.vertices[k] as usize)] += s.weights[k] * s.weights[k] * block;
+            matrix.blocks[pattern.diagonal_slot(s.stencil.vertices[k] as usize)] +=
+                s.stencil.weights[k] * s.stencil.weights[k] * block;
         }
     }
 }
@@ -124,8 +150,7 @@ mod tests {
     fn spring() -> (ContactSpring, Vec<Vec3>) {
         let x = vec![Vec3::new(0.5, 0.001, 0.2), Vec3::ZERO, Vec3::X, Vec3::Z];
         let s = ContactSpring {
-            vertices: [0, 1, 2, 3],
-            weights: [1.0, -0.3, -0.5, -0.2],
+            stencil: Stencil { vertices: [0, 1, 2, 3], weights: [1.0, -0.3, -0.5, -0.2] },
             normal: Vec3::Y,
             gap: 0.002,
             stiffness: 50.0,
