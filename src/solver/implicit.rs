@@ -467,10 +467,10 @@ fn solve(
     let pattern = dynamics.pattern();
     match settings.linear_solver {
         LinearSolver::ConjugateGradient => {
-            conjugate_gradient(pattern, None, dynamics.contact_springs(), settings, x, ws)
+            conjugate_gradient(pattern, None, springs_of(settings, dynamics), settings, x, ws)
         }
         LinearSolver::Multigrid => {
-            let (hierarchy, springs) = (Some(dynamics.hierarchy()), dynamics.contact_springs());
+            let (hierarchy, springs) = (Some(dynamics.hierarchy()), springs_of(settings, dynamics));
             let iterations = conjugate_gradient(pattern, hierarchy, springs, settings, x, ws);
             ws.multigrid.record(iterations);
             iterations
