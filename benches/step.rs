@@ -8,12 +8,14 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use glam::{Affine3A, Mat3, Vec3};
 use selvedge::Simulation;
 use selvedge::builders::grid::build_grid;
+use selvedge::collision::intersection::IntersectionCounter;
 use selvedge::components::{BendingDesc, BendingLawDesc, ClothMaterial, ClothTopology, MembraneDesc};
 use selvedge::scene::parse_scene;
 use selvedge::solver::descent::{DescentSettings, DescentWorkspace, descend};
 use selvedge::solver::elements::{BlockMatrix, VelocityJacobian};
 use selvedge::solver::forces::{Air, ClothDynamics, ForceModel, ForceScratch};
 use selvedge::solver::integrate::{Integrator, IntegratorWorkspace, MethodSettings, step};
+use selvedge::solver::probes::max_strain;
 
 const SIZES: [u32; 2] = [64, 256];
 
@@ -49,7 +51,8 @@ fn whole_step(c: &mut Criterion) {
 const KERNEL_SIZES: [u32; 3] = [32, 128, 256];
 
 /// The kernels alone on the material of the `selvedge bench` scenes (membrane μ = λ =
-/// 1000 N/m, bending 1e-5 N·m, 0.2 kg/m²): force evaluation, derivative assembly, one
+/// 1000 N/m, bending 1e-5 N·m, 0.2 kg/m²): force evaluation, the per-frame probes
+/// (potential energy, largest strain, self-intersection count), derivative assembly, one
 /// symmetric block-descent sweep over the implicit-Euler system at 1/60 s, and whole
 /// steps of three integrators.
 fn kernels(c: &mut Criterion) {
@@ -96,6 +99,16 @@ fn kernels(c: &mut Criterion) {
         let v = vec![Vec3::ZERO; count];
         group.bench_function(BenchmarkId::new("forces", &size), |b| {
             b.iter(|| model.eval(black_box(&x), &v, 0.0, &mut scratch, &mut force));
+        });
+        group.bench_function(BenchmarkId::new("probes/potential_energy", &size), |b| {
+            b.iter(|| model.potential_energy(black_box(&x), &mut scratch));
+        });
+        group.bench_function(BenchmarkId::new("probes/max_strain", &size), |b| {
+            b.iter(|| max_strain(black_box(&x), &cloth.particles.rest_position, &cloth.springs, &cloth.membranes));
+        });
+        let mut counter = IntersectionCounter::default();
+        group.bench_function(BenchmarkId::new("probes/self_intersections", &size), |b| {
+            b.iter(|| counter.count(black_box(&x), &cloth.triangles.indices));
         });
         let (mut dfdx, mut dfdv) = (BlockMatrix::default(), VelocityJacobian::default());
         group.bench_function(BenchmarkId::new("derivatives", &size), |b| {

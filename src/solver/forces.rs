@@ -7,12 +7,12 @@ use rayon::prelude::*;
 use super::PARALLEL_MIN_LEN;
 use super::contact_springs::ContactSpring;
 use super::descent::Colouring;
-use super::elements::hinge::hinge_angle;
 use super::elements::{BlockMatrix, BlockPattern, SpringElement, VelocityJacobian};
 use super::implicit::LinearDynamics;
 use super::integrate::Dynamics;
 use super::multigrid::Hierarchy;
 use super::pipeline::pipelined;
+use super::reduce;
 use crate::collision::motion_bounds::Surface;
 use crate::components::{BendingHinges, ClothTopology, MembraneTriangles, Springs};
 
@@ -172,9 +172,7 @@ impl ForceModel<'_> {
         let bending = self.hinges.view();
         let hinge_count = self.hinges.vertices.len();
         scratch.hinge_delta.resize(hinge_count, 0.0);
-        scratch.hinge_delta.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(h, d)| {
-            *d = hinge_angle(self.hinges.vertices[h].map(|p| x[p as usize])) - self.hinges.rest_angle[h];
-        });
+        bending.angles(x, &mut scratch.hinge_delta);
         let delta = &scratch.hinge_delta;
         scratch.face_moment.resize(self.hinges.faces.len(), [0.0; 3]);
         scratch.face_moment.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(f, m)| {
@@ -305,22 +303,21 @@ impl ForceModel<'_> {
     /// elastic energy of every spring, hinge and membrane triangle. `scratch` holds the
     /// hinge angles.
     pub fn potential_energy(&self, x: &[Vec3], scratch: &mut ForceScratch) -> f64 {
-        let gravity: f64 = x.iter().zip(self.inv_mass).map(|(p, w)| -f64::from(self.gravity.dot(*p) / w)).sum();
-        let springs: f64 = (0..self.springs.len())
-            .map(|s| {
-                let [i, j] = self.springs.pairs[s].map(|p| p as usize);
-                f64::from(self.spring(s).energy(x[i], x[j]))
-            })
-            .sum();
+        let gravity = reduce::sum(x.len(), |i| -f64::from(self.gravity.dot(x[i]) / self.inv_mass[i]));
+        let springs = reduce::sum(self.springs.len(), |s| {
+            let [i, j] = self.springs.pairs[s].map(|p| p as usize);
+            f64::from(self.spring(s).energy(x[i], x[j]))
+        });
         let bending = self.hinges.view();
         let delta = &mut scratch.hinge_delta;
         delta.resize(self.hinges.vertices.len(), 0.0);
         bending.angles(x, delta);
-        let hinges: f64 = (0..self.hinges.faces.len()).map(|f| f64::from(bending.face_energy(f, delta))).sum();
+        let hinges = reduce::sum(self.hinges.faces.len(), |f| f64::from(bending.face_energy(f, delta)));
         let material = &self.membranes.material;
-        let membranes: f64 = (self.membranes.indices.iter().zip(&self.membranes.elements))
-            .map(|(t, e)| f64::from(e.energy(material, t.map(|p| x[p as usize]))))
-            .sum();
+        let membranes = reduce::sum(self.membranes.indices.len(), |m| {
+            let corners = self.membranes.indices[m].map(|p| x[p as usize]);
+            f64::from(self.membranes.elements[m].energy(material, corners))
+        });
         gravity + springs + hinges + membranes
     }
 }

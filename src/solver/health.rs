@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use super::probes::edge_strains;
+use super::probes::most_stretched_edge;
 use crate::components::{MembraneTriangles, Springs};
 
 /// What went wrong in a cloth's state.
@@ -56,14 +56,7 @@ pub fn check_health(
             return Err(Unhealthy::NonFinite { particle: particle as u32, quantity });
         }
     }
-    let worst =
-        edge_strains(x, rest, springs, membranes).fold(None, |worst: Option<([u32; 2], f32)>, (pair, strain)| {
-            match worst {
-                Some((_, w)) if w >= strain => worst,
-                _ => Some((pair, strain)),
-            }
-        });
-    match worst {
+    match most_stretched_edge(x, rest, springs, membranes) {
         Some((particles, strain)) if strain > max_strain => Err(Unhealthy::Overstretched { particles, strain }),
         _ => Ok(()),
     }

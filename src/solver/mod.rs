@@ -16,6 +16,7 @@ pub mod ordering;
 pub mod pins;
 pub mod pipeline;
 pub mod probes;
+pub mod reduce;
 pub mod strain_limit;
 
 /// Below this many items a parallel loop runs on one thread: splitting costs more than it

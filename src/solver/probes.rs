@@ -1,36 +1,52 @@
 //! Measurements of a cloth's state, reported per frame.
 
+use std::ops::Range;
+
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
+use super::reduce;
 use crate::components::{MembraneTriangles, Springs};
 
-/// Kinetic energy `Σ ½ m |v|²` [J].
+/// Kinetic energy `Σ ½ m |v|²` [J], in parallel (the same on any number of threads).
 pub fn kinetic_energy(v: &[Vec3], inv_mass: &[f32]) -> f64 {
-    v.iter().zip(inv_mass).map(|(v, w)| 0.5 * f64::from(v.length_squared() / w)).sum()
+    reduce::sum(v.len(), |i| 0.5 * f64::from(v[i].length_squared() / inv_mass[i]))
 }
 
-/// Strain (length over rest length, minus one) of every edge the cloth resists stretching
-/// along: each spring, then each edge of each membrane triangle, with its two particles.
-/// Rest lengths of membrane edges come from the rest positions `rest`.
-pub fn edge_strains<'a>(
-    x: &'a [Vec3],
-    rest: &'a [Vec3],
-    springs: &'a Springs,
-    membranes: &'a MembraneTriangles,
-) -> impl Iterator<Item = ([u32; 2], f32)> + 'a {
+/// The most stretched of the edges the cloth resists stretching along (each spring, then
+/// each side of each membrane triangle, whose rest length comes from the rest positions
+/// `rest`), with its two particles and its strain (length over rest length, minus one);
+/// the first of equals; `None` without edges. In parallel, the same on any number of
+/// threads.
+pub fn most_stretched_edge(
+    x: &[Vec3],
+    rest: &[Vec3],
+    springs: &Springs,
+    membranes: &MembraneTriangles,
+) -> Option<([u32; 2], f32)> {
     let strain = |[i, j]: [u32; 2], rest_length: f32| (x[i as usize] - x[j as usize]).length() / rest_length - 1.0;
-    let springs = springs.pairs.iter().zip(&springs.rest_length).map(move |(&pair, &r)| (pair, strain(pair, r)));
-    let membranes = membranes.indices.iter().flat_map(move |&[a, b, c]| {
-        [[a, b], [b, c], [c, a]]
-            .map(|pair| (pair, strain(pair, (rest[pair[0] as usize] - rest[pair[1] as usize]).length())))
-    });
-    springs.chain(membranes)
+    let edge = |e: usize| {
+        if e < springs.len() {
+            (springs.pairs[e], strain(springs.pairs[e], springs.rest_length[e]))
+        } else {
+            let side = e - springs.len();
+            let triangle = membranes.indices[side / 3];
+            let pair = [triangle[side % 3], triangle[(side + 1) % 3]];
+            (pair, strain(pair, (rest[pair[0] as usize] - rest[pair[1] as usize]).length()))
+        }
+    };
+    let worse = |first: Option<([u32; 2], f32)>, second: Option<([u32; 2], f32)>| match (first, second) {
+        (Some(a), Some(b)) => Some(if b.1 > a.1 { b } else { a }),
+        (a, None) => a,
+        (None, b) => b,
+    };
+    let edges = springs.len() + 3 * membranes.indices.len();
+    reduce::reduce(0..edges, &|range: Range<usize>| range.map(edge).fold(None, |w, e| worse(w, Some(e))), &worse)
 }
 
-/// Largest edge strain [-] (see [`edge_strains`]), or 0 without edges.
+/// Largest edge strain [-] (see [`most_stretched_edge`]), or 0 without edges.
 pub fn max_strain(x: &[Vec3], rest: &[Vec3], springs: &Springs, membranes: &MembraneTriangles) -> f32 {
-    edge_strains(x, rest, springs, membranes).map(|(_, strain)| strain).reduce(f32::max).unwrap_or(0.0)
+    most_stretched_edge(x, rest, springs, membranes).map_or(0.0, |(_, strain)| strain)
 }
 
 /// A measurement of one cloth that a scene asks for by configuration.

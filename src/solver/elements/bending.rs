@@ -10,9 +10,11 @@
 //! follow its generators stores exactly `½ B κ² A`.
 
 use glam::{Mat3, Vec3};
+use rayon::prelude::*;
 
 use super::hinge::{dihedral_hessian, hinge_angle, hinge_gradient};
 use super::spring::outer;
+use crate::solver::PARALLEL_MIN_LEN;
 
 /// No hinge on this side of a face (a boundary edge).
 pub const NO_HINGE: u32 = u32::MAX;
@@ -126,11 +128,11 @@ pub struct BendingSurface<'a> {
 }
 
 impl BendingSurface<'_> {
-    /// Each hinge's angle away from rest [rad], written to `delta`.
+    /// Each hinge's angle away from rest [rad], written to `delta`, in parallel.
     pub fn angles(&self, x: &[Vec3], delta: &mut [f32]) {
-        for (h, d) in delta.iter_mut().enumerate() {
+        delta.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(h, d)| {
             *d = hinge_angle(self.hinges[h].map(|p| x[p as usize])) - self.rest_angle[h];
-        }
+        });
     }
 
     /// Energy of face `f` [J].
