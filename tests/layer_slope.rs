@@ -1,0 +1,86 @@
+//! The slope test with the slope made of cloth (`scenes/layer_slope.ron`): a small layer
+//! rests on a pinned layer of the same cloth under gravity leaning 30°, held apart by the
+//! contact springs of the implicit step and the contact stage after it. Without friction
+//! between the layers it slides at g sin 30°; with μ = tan 30° + 0.01 it sticks; with
+//! μ = 0.2 it should slide at g (sin 30° − μ cos 30°).
+
+mod common;
+
+use glam::Vec3;
+use selvedge::Simulation;
+use selvedge::components::Particles;
+
+const G: f32 = 9.8;
+
+/// The bundled scene with friction `mu` between the layers.
+fn simulation(mu: f32) -> Simulation {
+    common::bundled_with("layer_slope.ron", |scene| {
+        scene.cloths[0].self_collision.as_mut().expect("the scene's cloth collides with itself").friction = Some(mu);
+    })
+}
+
+/// The particles of the upper layer: those that start above the pinned one.
+fn upper_layer(sim: &mut Simulation) -> Vec<usize> {
+    let p = sim.world_mut().query::<&Particles>().single(sim.world()).expect("one cloth").clone();
+    (0..p.len()).filter(|&i| p.position[i].y > 0.0015).collect()
+}
+
+/// Mean position and velocity of the particles `layer`.
+fn centre(sim: &mut Simulation, layer: &[usize]) -> (Vec3, Vec3) {
+    let p = sim.world_mut().query::<&Particles>().single(sim.world()).expect("one cloth").clone();
+    let n = layer.len() as f32;
+    (layer.iter().map(|&i| p.position[i]).sum::<Vec3>() / n, layer.iter().map(|&i| p.velocity[i]).sum::<Vec3>() / n)
+}
+
+/// Steps to time `t` [s], checking that the layers keep apart and do not cross.
+fn run_until(sim: &mut Simulation, t: f64, layer: &[usize]) {
+    while sim.clock().time_s < t - 1e-9 {
+        sim.step_frame().unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(common::probe(sim, "self_intersections"), 0.0, "the layers never cross");
+        let (position, _) = centre(sim, layer);
+        assert!(position.y > 0.0015 && position.y < 0.0025, "the upper layer rests 2 mm up, not {} m", position.y);
+    }
+}
+
+/// Acceleration of the upper layer along the slope (+X) between 0.1 s (landed) and 0.5 s,
+/// from its mean velocity.
+fn acceleration(mu: f32) -> f32 {
+    let mut sim = simulation(mu);
+    let layer = upper_layer(&mut sim);
+    assert_eq!(layer.len(), 81, "the upper layer is the mesh's 9 × 9 square");
+    run_until(&mut sim, 0.1, &layer);
+    let (_, v0) = centre(&mut sim, &layer);
+    run_until(&mut sim, 0.5, &layer);
+    let (_, v1) = centre(&mut sim, &layer);
+    (v1.x - v0.x) / 0.4
+}
+
+#[test]
+fn without_friction_a_layer_slides_on_a_layer_of_its_cloth_at_g_sin_30() {
+    let (measured, expected) = (acceleration(0.0), G * 0.5);
+    assert!((measured - expected).abs() < 0.02 * expected, "acceleration {measured} m/s², expected {expected}");
+}
+
+#[test]
+fn with_mu_above_tan_30_a_layer_sticks_on_a_layer_of_its_cloth() {
+    let mut sim = simulation(30f32.to_radians().tan() + 0.01);
+    let layer = upper_layer(&mut sim);
+    run_until(&mut sim, 0.1, &layer);
+    let (start, _) = centre(&mut sim, &layer);
+    run_until(&mut sim, 0.6, &layer);
+    let (end, _) = centre(&mut sim, &layer);
+    assert!((end - start).length() < 1e-3, "slid {} m in half a second", (end - start).length());
+}
+
+/// Known defect: the contact springs' lagged friction takes as the normal force the
+/// spring's full push `k (δ − d)` of every pair closer than δ, also of a pair that has just
+/// come closer, whose spring will push some twenty times less in its first step; a layer
+/// sliding over another keeps landing on it, and with μ = 0.2 it holds fast (0.2 mm in
+/// 0.4 s). See the README's known defects.
+#[test]
+#[ignore = "known defect: friction between layers of one cloth is too strong while sliding"]
+fn with_mu_0_2_a_layer_slides_on_a_layer_of_its_cloth_at_the_coulomb_acceleration() {
+    let cos30 = 30f32.to_radians().cos();
+    let (measured, expected) = (acceleration(0.2), G * (0.5 - 0.2 * cos30));
+    assert!((measured - expected).abs() < 0.03 * expected, "acceleration {measured} m/s², expected {expected}");
+}
