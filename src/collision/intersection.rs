@@ -35,10 +35,10 @@ impl IntersectionCounter {
     /// Candidate pairs come from a uniform grid whose cells are as wide as the widest
     /// bounding box: two boxes overlap only if their centres lie in neighbouring cells,
     /// and a cell holds a handful of triangles, so the work grows with the triangle count.
-    /// The cells are hashed into a table twice as long as the triangle list. (A sweep along one
-    /// axis met every box of a strip across the sheet, √n of them: 61 ms a count on the
-    /// 256² hang scene on two threads, a seventh of its frame. A box tree finds as few
-    /// candidates but cost 260 bytes a particle of hang_64.)
+    /// The cells are hashed into a table twice as long as the triangle list. (A sweep
+    /// along one axis met every box of a strip across the sheet, √n of them: 61 ms a
+    /// count on a 256² sheet on two threads. A box tree finds as few candidates but cost
+    /// 260 bytes a particle of hang_64.)
     pub fn count(&mut self, x: &[Vec3], triangles: &[[u32; 3]]) -> usize {
         let bounds = |t: usize| {
             let [a, b, c] = triangles[t].map(|p| x[p as usize]);
@@ -134,7 +134,7 @@ impl Grid {
         Self { origin: low, inverse_width: 1.0 / width }
     }
 
-    /// The key of the cell holding point `p`.
+    /// The coordinates of the cell holding point `p`.
     fn cell(&self, p: Vec3) -> [u32; 3] {
         ((p - self.origin) * self.inverse_width).to_array().map(|c| (c as u32).min(Self::CELLS - 1))
     }
