@@ -151,7 +151,7 @@ fn kernels(c: &mut Criterion) {
                 free_inv_mass: &topology.free_inv_mass,
                 scratch: &mut scratch,
                 self_collision: false,
-                contact_springs: &[],
+                contact_springs: &mut [],
             };
             let mut ws = IntegratorWorkspace::default();
             ws.resize(count);

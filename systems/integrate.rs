@@ -30,7 +30,7 @@ pub fn integrate_cloths(
         &Touching,
         &mut SolverWorkspace,
         Has<SelfCollision>,
-        Option<&SelfTouching>,
+        Option<&mut SelfTouching>,
     )>,
     mut colliders: Query<(&Collider, Option<&mut Prop>)>,
     mut props: Local<PropCoupling>,
@@ -75,7 +75,7 @@ pub fn integrate_cloths(
             free_inv_mass: &topology.free_inv_mass,
             scratch: forces,
             self_collision,
-            contact_springs: self_touching.map_or(&[], |s| &s.0),
+            contact_springs: self_touching.map_or(&mut [], |s| s.into_inner().0.as_mut_slice()),
         };
         let mut result = Ok(StepReport::default());
         for split in 0..splits {

@@ -94,9 +94,6 @@ const GAP_RECOVERY: f32 = 0.25;
 const SPRING_RECOVERY: f32 = 0.95;
 /// `k h² / m` of the contact springs.
 const SPRING_RATIO: f32 = SPRING_RECOVERY / (1.0 - SPRING_RECOVERY);
-/// Relative tangential speed below which a contact spring's friction holds like a stiff
-/// damper rather than Coulomb's constant force [m/s].
-const STATIC_SPEED: f32 = 1e-3;
 /// Gap, as a fraction of δ, a continuous-collision impulse leaves between a pair.
 const IMPACT_GAP: f32 = 0.1;
 /// Passes of continuous collision before impact zones take over.
@@ -575,8 +572,9 @@ fn proximity(mesh: &ContactMesh, pair: Pair, h: f32, x0: &[Vec3]) -> Option<Cont
 /// implicit step (see [`ContactSpring`]), if the pair is within one cloth and any of its
 /// vertices is free. Stiff enough to restore [`SPRING_RECOVERY`] of the missing gap
 /// within a step of length `h` on its own: `k = r m / h²` for the pair's effective mass
-/// `m = 1 / Σ (w² / m_k)`. Its friction is Coulomb's, lagged (as in IPC): the push at `x`
-/// times μ over the pair's tangential speed at `v`, or over [`STATIC_SPEED`] if slower.
+/// `m = 1 / Σ (w² / m_k)`. Its friction is first lagged from the push at `x` and the
+/// velocities `v` ([`ContactSpring::lag_friction`]); the step lags it again from its own
+/// solution ([`crate::solver::contact_springs::lag`]).
 ///
 /// Only a pair whose closest points lie inside both its primitives gets a spring. Where
 /// one lies on a boundary (a vertex near the edge of a triangle, an edge's end near
@@ -597,10 +595,9 @@ fn spring(mesh: &ContactMesh, pair: Pair, h: f32, x: &[Vec3], v: &[Vec3]) -> Opt
     let inv_mass = stencil.inverse_mass(&mesh.inv_mass);
     (inv_mass > 0.0).then(|| {
         let stiffness = SPRING_RATIO / (inv_mass * h * h);
-        let relative = stencil.relative(v);
-        let sliding = (relative - relative.dot(normal) * normal).length().max(STATIC_SPEED);
-        let drag = friction * stiffness * (gap - distance) / sliding;
-        ContactSpring { stencil, normal, gap, stiffness, drag }
+        let mut spring = ContactSpring { stencil, normal, gap, stiffness, friction, drag: 0.0 };
+        spring.lag_friction(stiffness * (gap - distance), v);
+        spring
     })
 }
 

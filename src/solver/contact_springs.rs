@@ -3,8 +3,10 @@
 //! normal, whose stiffness enters the step's matrix and couples the pair's four vertices.
 //!
 //! Friction enters the same solve, as a damper across the normal whose coefficient is
-//! lagged from the step before (IPC's lagged friction): Coulomb's force where the pair
-//! slides, a stiff damper that holds it where it barely moves.
+//! lagged (IPC's lagged friction): Coulomb's force where the pair slides, a stiff damper
+//! that holds it where it barely moves. It is lagged first from the start of the step,
+//! then again from the step's own solution, solving again each time ([`lag`]); there a
+//! spring that pulls is released, as contact does not pull.
 //!
 //! The contact stage after the step ([`crate::collision::self_contact`]) stops a vertex
 //! that the solve carried into another layer, but the solve moved it there together with
@@ -53,6 +55,10 @@ impl Stencil {
     }
 }
 
+/// Relative tangential speed below which a contact spring's friction holds like a stiff
+/// damper rather than Coulomb's constant force [m/s].
+const STATIC_SPEED: f32 = 1e-3;
+
 /// A pair of primitives of one cloth held apart in the implicit step: its distance along
 /// `normal` is pushed towards `gap`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -65,19 +71,96 @@ pub struct ContactSpring {
     pub gap: f32,
     /// Stiffness [N/m].
     pub stiffness: f32,
+    /// Coefficient of friction between the pair's sides.
+    pub friction: f32,
     /// Friction, as a damping coefficient of the pair's relative velocity across the
-    /// normal [N·s/m].
+    /// normal [N·s/m]: see [`ContactSpring::lag_friction`].
     pub drag: f32,
 }
 
 impl ContactSpring {
+    /// The spring's push along its normal at `x` [N]: `k (gap − d)`, negative where it
+    /// pulls (the pair has come further apart than its gap).
+    pub fn push(&self, x: &[Vec3]) -> f32 {
+        self.stiffness * (self.gap - self.stencil.relative(x).dot(self.normal))
+    }
+
     /// The force on the pair's first side at `(x, v)`: the spring's push, `k (gap − d) n`,
     /// and friction, `−c (I − n nᵀ) v_rel`. Vertex `k` takes `w_k` times it.
     fn force(&self, x: &[Vec3], v: &[Vec3]) -> Vec3 {
         let velocity = self.stencil.relative(v);
-        self.stiffness * (self.gap - self.stencil.relative(x).dot(self.normal)) * self.normal
-            - self.drag * (velocity - velocity.dot(self.normal) * self.normal)
+        self.push(x) * self.normal - self.drag * (velocity - velocity.dot(self.normal) * self.normal)
     }
+
+    /// The pair's speed across the normal at `v`, no less than [`STATIC_SPEED`] [m/s].
+    fn sliding(&self, v: &[Vec3]) -> f32 {
+        let relative = self.stencil.relative(v);
+        (relative - relative.dot(self.normal) * self.normal).length().max(STATIC_SPEED)
+    }
+
+    /// Sets the friction to Coulomb's for the push `push` [N] and the pair's velocities
+    /// `v`, lagged (as in IPC): a damper that brakes the pair's tangential speed at `v`
+    /// with `μ push`, or, below [`STATIC_SPEED`], holds it like a stiff damper.
+    pub fn lag_friction(&mut self, push: f32, v: &[Vec3]) {
+        self.drag = self.friction * push / self.sliding(v);
+    }
+
+    /// The spring lagged from the end `(x, v)` of a step solved with it: its friction
+    /// from the push it gave there, the normal force its friction should have resisted
+    /// with; released (no stiffness, no friction) where it pulled, as contact does not.
+    fn lagged(&self, x: &[Vec3], v: &[Vec3]) -> ContactSpring {
+        let push = self.push(x);
+        let mut lagged = *self;
+        if push <= 0.0 {
+            lagged.stiffness = 0.0;
+            lagged.drag = 0.0;
+        } else {
+            lagged.lag_friction(push, v);
+        }
+        lagged
+    }
+}
+
+/// Change in the springs' total friction, as a fraction of it, below which lagging them
+/// again is not worth another solve.
+const LAG_TOLERANCE: f32 = 0.05;
+
+/// Whether lagging `springs` from the end `(x, v)` of a step solved with them
+/// ([`ContactSpring::lagged`]) would release one or change their total friction force at
+/// `v` by more than [`LAG_TOLERANCE`] of it.
+///
+/// The friction first lagged from the start of the step can be far from what the springs
+/// give: a pair that has just come closer than its gap will be pushed apart by a fraction
+/// of its push at the start, and a layer sliding over another keeps landing on it (on
+/// `scenes/layer_slope.ron` the pushes at the start summed two to nine times the layer's
+/// weight, and held it fast where it should slide). A spring that pulls at the end holds
+/// the pair together and the pushes of its neighbours grow by as much, and with them their
+/// friction.
+pub fn lag_changes(springs: &[ContactSpring], x: &[Vec3], v: &[Vec3]) -> bool {
+    let (mut change, mut total) = (0.0, 0.0);
+    for s in springs.iter().filter(|s| s.stiffness > 0.0) {
+        let lagged = s.lagged(x, v);
+        if lagged.stiffness == 0.0 {
+            return true;
+        }
+        let sliding = s.sliding(v);
+        change += (lagged.drag - s.drag).abs() * sliding;
+        total += lagged.drag * sliding;
+    }
+    change > LAG_TOLERANCE * total
+}
+
+/// Lags each of `springs` from the end `(x, v)` of a step solved with them
+/// ([`ContactSpring::lagged`]).
+pub fn lag(springs: &mut [ContactSpring], x: &[Vec3], v: &[Vec3]) {
+    for s in springs {
+        *s = s.lagged(x, v);
+    }
+}
+
+/// Whether any of the springs has friction.
+pub fn have_friction(springs: &[ContactSpring]) -> bool {
+    springs.iter().any(|s| s.friction > 0.0)
 }
 
 /// Adds the springs' forces at `(x, v)` to `force`.
@@ -154,6 +237,7 @@ mod tests {
             normal: Vec3::Y,
             gap: 0.002,
             stiffness: 50.0,
+            friction: 0.5,
             drag: 0.3,
         };
         (s, x)
@@ -171,6 +255,28 @@ mod tests {
         assert!((force[0] - Vec3::new(-0.15, 0.05, 0.0)).length() < 1e-6, "{}", force[0]);
         assert!(force[1..].iter().all(|f| f.y < 0.0 && f.x > 0.0));
         assert!(force.iter().sum::<Vec3>().length() < 1e-7);
+    }
+
+    #[test]
+    fn lagging_takes_the_push_and_sliding_at_the_solution_and_releases_a_spring_that_pulls() {
+        let (s, x) = spring();
+        // Slides at 0.5 m/s along x; 1.5 mm up, the spring pushes k · 0.5 mm = 0.025 N.
+        let v = vec![Vec3::new(0.5, 0.0, 0.0), Vec3::ZERO, Vec3::ZERO, Vec3::ZERO];
+        let mut pressed = x.clone();
+        pressed[0].y = 0.0015;
+        let mut springs = [s];
+        lag(&mut springs, &pressed, &v);
+        assert!((springs[0].drag - 0.5 * 0.025 / 0.5).abs() < 1e-6, "drag {}", springs[0].drag);
+        assert_eq!(springs[0].stiffness, s.stiffness);
+        // 2.5 mm up, beyond the 2 mm gap, it would pull.
+        let mut apart = x.clone();
+        apart[0].y = 0.0025;
+        assert!(lag_changes(&springs, &apart, &v));
+        lag(&mut springs, &apart, &v);
+        assert_eq!((springs[0].stiffness, springs[0].drag), (0.0, 0.0));
+        let mut force = vec![Vec3::ZERO; 4];
+        add_forces(&springs, &apart, &v, &mut force);
+        assert!(force.iter().all(|f| *f == Vec3::ZERO));
     }
 
     #[test]

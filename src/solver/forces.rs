@@ -334,7 +334,7 @@ pub struct ClothDynamics<'a> {
     /// Whether the cloth collides with itself, which bounds block descent's iterations.
     pub self_collision: bool,
     /// The cloth–cloth contacts the implicit step holds apart.
-    pub contact_springs: &'a [ContactSpring],
+    pub contact_springs: &'a mut [ContactSpring],
 }
 
 impl Dynamics for ClothDynamics<'_> {
@@ -373,6 +373,10 @@ impl LinearDynamics for ClothDynamics<'_> {
     }
 
     fn contact_springs(&self) -> &[ContactSpring] {
+        self.contact_springs
+    }
+
+    fn contact_springs_mut(&mut self) -> &mut [ContactSpring] {
         self.contact_springs
     }
 

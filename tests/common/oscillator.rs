@@ -90,7 +90,7 @@ impl ParticleSystem {
             free_inv_mass: &self.topology.free_inv_mass,
             scratch: &mut scratch,
             self_collision: false,
-            contact_springs: &[],
+            contact_springs: &mut [],
         };
         let mut x = self.x.clone();
         let mut v = vec![Vec3::ZERO; x.len()];
