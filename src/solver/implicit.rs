@@ -372,7 +372,7 @@ pub fn implicit_step(
 /// `scenes/layer_slope.ron` (μ = 0.2, Coulomb's friction slides at 3.20 m/s²) the layer
 /// slid at 2.3, 2.5 and 2.3 m/s² with one, two and three lags and pulling springs kept;
 /// with pulling springs released, at 2.18, 3.01 and 3.17 m/s². Each lag costs a solve
-/// from the last solution: the fold_64 bench took 27 % longer with three, sphere_64 9 %.
+/// from the last solution, all but the last one loose ([`LAG_LOOSENING`]).
 const FRICTION_LAGS: u32 = 3;
 
 /// How much looser than the settings' tolerance the solves are whose solution the contact
