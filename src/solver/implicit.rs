@@ -321,10 +321,7 @@ pub fn implicit_step(
     ws.dv.copy_from_slice(&ws.delta);
 
     for _ in 1..settings.newton_iterations {
-        for i in 0..n {
-            ws.x[i] = x[i] + h * (v[i] + theta * ws.dv[i]);
-            ws.v[i] = v[i] + ws.dv[i];
-        }
+        end_of_step(x, v, &ws.dv, h, theta, &mut ws.x, &mut ws.v);
         ws.dfdx = std::mem::take(&mut ws.system);
         dynamics.linearize(&ws.x, &ws.v, t + h, &mut ws.force, &mut ws.dfdx, &mut ws.dfdv);
         let pattern = dynamics.pattern();
@@ -385,9 +382,10 @@ const LAG_LOOSENING: f32 = 30.0;
 
 /// Lags the contact springs' friction from the step's solution `ws.delta` and releases the
 /// springs that pull there ([`contact_springs::lag`]), then, unless that changes little,
-/// solves again from the solution to `tolerance` (IPC's lagged iterations). The friction the first solve
-/// met was lagged from the start of the step, whose pushes can be many times those the
-/// springs give. Returns the solve's iterations, or `None` when it did not solve.
+/// solves again from the solution to `tolerance` (IPC's lagged iterations). The friction
+/// the first solve met was lagged from the start of the step, whose pushes can be many
+/// times those the springs give. Returns the solve's iterations, or `None` when it did
+/// not solve.
 fn lag_friction(
     dynamics: &mut impl LinearDynamics,
     settings: &ImplicitSettings,
@@ -399,10 +397,7 @@ fn lag_friction(
     ws: &mut ImplicitWorkspace,
 ) -> Option<u32> {
     let theta = settings.theta;
-    for i in 0..x.len() {
-        ws.x[i] = x[i] + h * (v[i] + theta * ws.delta[i]);
-        ws.v[i] = v[i] + ws.delta[i];
-    }
+    end_of_step(x, v, &ws.delta, h, theta, &mut ws.x, &mut ws.v);
     if !contact_springs::lag_changes(dynamics.contact_springs(), &ws.x, &ws.v) {
         return None;
     }
@@ -413,6 +408,15 @@ fn lag_friction(
     ws.constraint_impulses.fill(Vec3::ZERO);
     add_constraint_impulses(dynamics.pattern(), springs_of(settings, dynamics), constraints, ws);
     Some(iterations)
+}
+
+/// The end `(x_end, v_end)` of the θ-step from `(x, v)` that changes the velocities by
+/// `dv`: `x + h (v + θ Δv)` and `v + Δv`.
+fn end_of_step(x: &[Vec3], v: &[Vec3], dv: &[Vec3], h: f32, theta: f32, x_end: &mut [Vec3], v_end: &mut [Vec3]) {
+    for i in 0..x.len() {
+        x_end[i] = x[i] + h * (v[i] + theta * dv[i]);
+        v_end[i] = v[i] + dv[i];
+    }
 }
 
 /// Adds `sign` times the `springs`' part of the step's system (their diagonal blocks at
@@ -638,11 +642,12 @@ fn fused(
 /// Solves `A delta = rhs` within the constraint filters to the relative residual
 /// `tolerance` by preconditioned conjugate gradients (Baraff & Witkin's modified PCG), `A`
 /// the system matrix with the `springs`' off-diagonal blocks ([`multiply_system`]):
-/// `delta` starts as given and only moves within the filters. The preconditioner is a multigrid V-cycle over `hierarchy` if
-/// given, else block Jacobi. Returns the iterations taken. Stops early on a direction of
-/// non-positive curvature, which a semi-definite assembly should not give. The vector work
-/// runs in parallel over fixed chunks of particles, each pass computing the dot products it
-/// needs on the way, summed in chunk order.
+/// `delta` starts as given and only moves within the filters. The preconditioner is a
+/// multigrid V-cycle over `hierarchy` if given, else block Jacobi. Returns the iterations
+/// taken. Stops early on a direction of non-positive curvature, which a semi-definite
+/// assembly should not give. The vector work runs in parallel over fixed chunks of
+/// particles, each pass computing the dot products it needs on the way, summed in chunk
+/// order.
 fn conjugate_gradient(
     pattern: &BlockPattern,
     hierarchy: Option<&Hierarchy>,
