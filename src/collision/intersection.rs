@@ -20,6 +20,9 @@ pub fn count_self_intersections(x: &[Vec3], triangles: &[[u32; 3]]) -> usize {
 /// counts every frame.
 #[derive(Debug, Clone, Default)]
 pub struct IntersectionCounter {
+    /// Each triangle's bounding box (low and high corner), read for every candidate pair:
+    /// computed there each time, the count took 5.5 ms on a 128² sheet instead of 4.7.
+    boxes: Vec<(Vec3, Vec3)>,
     /// The grid cell holding each triangle's bounding-box centre, as a key.
     cells: Vec<u64>,
     /// The triangles, grouped by the hash bucket of their cell, in index order within a
@@ -40,12 +43,17 @@ impl IntersectionCounter {
     /// count on a 256² sheet on two threads. A box tree finds as few candidates but cost
     /// 260 bytes a particle of hang_64.)
     pub fn count(&mut self, x: &[Vec3], triangles: &[[u32; 3]]) -> usize {
-        let bounds = |t: usize| {
-            let [a, b, c] = triangles[t].map(|p| x[p as usize]);
-            (a.min(b).min(c), a.max(b).max(c))
-        };
+        let Self { boxes, cells, slots, ends } = self;
+        triangles
+            .par_iter()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .map(|triangle| {
+                let [a, b, c] = triangle.map(|p| x[p as usize]);
+                (a.min(b).min(c), a.max(b).max(c))
+            })
+            .collect_into_vec(boxes);
+        let bounds = |t: usize| boxes[t];
         let grid = Grid::around(triangles.len(), bounds);
-        let Self { cells, slots, ends } = self;
         cells.resize(triangles.len(), 0);
         cells.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(t, cell)| {
             let (min, max) = bounds(t);
@@ -69,7 +77,7 @@ impl IntersectionCounter {
             slots[*b as usize] = t as u32;
             *b += 1;
         }
-        let (cells, slots, ends) = (&self.cells, &self.slots, &self.ends);
+        let (cells, slots, ends) = (&*cells, &*slots, &*ends);
         let corners = |tri: [u32; 3]| tri.map(|p| x[p as usize].as_dvec3());
         (0..triangles.len())
             .into_par_iter()
@@ -166,18 +174,38 @@ impl Grid {
 
 /// Whether two triangles intersect: some edge of one crosses the other.
 pub fn triangles_intersect(first: [DVec3; 3], second: [DVec3; 3]) -> bool {
-    // A triangle wholly on one side of the other's plane meets neither it nor its edges.
-    let apart = |t: [DVec3; 3], [a, b, c]: [DVec3; 3]| {
-        let normal = (b - a).cross(c - a);
-        let side = t.map(|p| normal.dot(p - a));
-        side.iter().all(|&d| d > 0.0) || side.iter().all(|&d| d < 0.0)
-    };
-    if apart(second, first) || apart(first, second) {
-        return false;
-    }
+    !separated(first, second) && edges_cross(first, second)
+}
+
+/// Whether some edge of one triangle passes through the other (the intersection test
+/// without [`separated`]'s quick answers).
+fn edges_cross(first: [DVec3; 3], second: [DVec3; 3]) -> bool {
     let edges = |t: [DVec3; 3]| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])];
     edges(first).iter().any(|&(p, q)| segment_crosses_triangle(p, q, second))
         || edges(second).iter().any(|&(p, q)| segment_crosses_triangle(p, q, first))
+}
+
+/// Whether a plane strictly separates the triangles, tried along the two normals and the
+/// six directions in a triangle's plane across one of its edges: a triangle wholly on one
+/// side of the other's plane, or beyond one of the other's edges within its plane. Two
+/// triangles of a sheet that share no vertex lie nearly in one plane, so only the second
+/// kind separates them, for less than the six edge–triangle tests it spares (the count
+/// on a 128² sheet took 5.5 ms instead of 8.0 on two threads).
+fn separated(first: [DVec3; 3], second: [DVec3; 3]) -> bool {
+    let beyond = |t: [DVec3; 3], [a, b, c]: [DVec3; 3]| {
+        let normal = (b - a).cross(c - a);
+        let side = t.map(|p| normal.dot(p - a));
+        if side.iter().all(|&d| d > 0.0) || side.iter().all(|&d| d < 0.0) {
+            return true;
+        }
+        // Across edge (p, q), the triangle lies on the side of its third corner r.
+        [(a, b, c), (b, c, a), (c, a, b)].iter().any(|&(p, q, r)| {
+            let across = normal.cross(q - p);
+            let inside = across.dot(r - p);
+            t.iter().all(|&u| across.dot(u - p) * inside < 0.0)
+        })
+    };
+    beyond(second, first) || beyond(first, second)
 }
 
 /// Whether the segment `p → q` passes through the triangle (Möller–Trumbore), ends
@@ -226,6 +254,33 @@ mod tests {
         let lifted: Vec<Vec3> =
             x.iter().enumerate().map(|(i, p)| if i >= 3 { *p + Vec3::Y * 1.5 } else { *p }).collect();
         assert_eq!(count_self_intersections(&lifted, &[[0, 1, 2], [3, 4, 5]]), 0);
+    }
+
+    /// The separating planes never part triangles whose edges cross: over pairs of a
+    /// jittered sheet's triangles, near each other and nearly in one plane, and over
+    /// pairs scattered in a box.
+    #[test]
+    fn separated_triangles_never_have_crossing_edges() {
+        // Knuth's multiplicative hash: fixed, irregular numbers in [0, 1).
+        let scatter = |k: u32| f64::from(k.wrapping_mul(2_654_435_761) >> 8) / f64::from(1u32 << 24);
+        let (mut parted, mut crossing) = (0, 0);
+        for pair in 0..20_000u32 {
+            let flat = pair % 2 == 0;
+            let corner = |k: u32| {
+                let jitter = DVec3::new(
+                    scatter(12 * pair + 3 * k),
+                    scatter(12 * pair + 3 * k + 1),
+                    scatter(12 * pair + 3 * k + 2),
+                );
+                if flat { DVec3::new(2.0 * jitter.x, 2.0 * jitter.y, 1e-3 * jitter.z) } else { jitter }
+            };
+            let (first, second) = ([corner(0), corner(1), corner(2)], [corner(3), corner(4), corner(5)]);
+            let crosses = edges_cross(first, second);
+            assert!(!(separated(first, second) && crosses), "pair {pair}: {first:?} {second:?}");
+            parted += usize::from(separated(first, second));
+            crossing += usize::from(crosses);
+        }
+        assert!(parted > 5_000 && crossing > 1_000, "{parted} pairs parted, {crossing} crossing");
     }
 
     /// The grid finds every crossing pair that testing all pairs finds: in a sheet whose
