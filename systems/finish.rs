@@ -62,13 +62,12 @@ pub fn measure_probes(
         let model = environment.model(&particles.inv_mass, elements);
         intersections += counter.count(&particles.position, model.triangles);
         kinetic += kinetic_energy(&particles.velocity, &particles.inv_mass);
-        let SolverWorkspace { forces, force, .. } = &mut *workspace;
+        let forces = &mut workspace.forces;
         potential += model.potential_energy(&particles.position, forces);
         strain = strain.max(max_strain(&particles.position, &particles.rest_position, model.springs, model.membranes));
         if !pins.is_empty() {
-            force.resize(particles.len(), Vec3::ZERO);
-            model.eval(&particles.position, &particles.velocity, environment.time(), forces, force);
-            pin_force += pin_reaction(&pins.particles, force);
+            let (x, v) = (&particles.position, &particles.velocity);
+            pin_force += pin_reaction(model.force_on(&pins.particles, x, v, environment.time(), forces));
         }
     }
     probes.set("kinetic_energy_j", kinetic);

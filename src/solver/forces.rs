@@ -84,6 +84,64 @@ pub struct ForceScratch {
     local_blocks: Vec<Mat3>,
 }
 
+/// The forces of a cloth's elements, element by element.
+trait ElementForces {
+    /// Force of spring `s` on its first particle (the second feels the opposite).
+    fn spring(&self, s: usize) -> Vec3;
+    /// Forces of hinge `h` on its four vertices.
+    fn hinge(&self, h: usize) -> [Vec3; 4];
+    /// Forces of membrane triangle `m` on its corners.
+    fn membrane(&self, m: usize) -> [Vec3; 3];
+    /// Wind force on each vertex of triangle `t`.
+    fn wind(&self, t: usize) -> Vec3;
+}
+
+/// All elements' forces, as [`ForceModel::eval`] computed them.
+impl ElementForces for ForceScratch {
+    fn spring(&self, s: usize) -> Vec3 {
+        self.spring[s]
+    }
+    fn hinge(&self, h: usize) -> [Vec3; 4] {
+        self.hinge[h]
+    }
+    fn membrane(&self, m: usize) -> [Vec3; 3] {
+        self.membrane[m]
+    }
+    fn wind(&self, t: usize) -> Vec3 {
+        self.triangle[t]
+    }
+}
+
+/// Elements' forces computed one at a time when asked for ([`ForceModel::force_on`]).
+struct LocalForces<'a> {
+    model: &'a ForceModel<'a>,
+    x: &'a [Vec3],
+    v: &'a [Vec3],
+    wind: Vec3,
+    /// Every hinge's angle away from rest [rad].
+    delta: &'a [f32],
+}
+
+impl ElementForces for LocalForces<'_> {
+    fn spring(&self, s: usize) -> Vec3 {
+        let [i, j] = self.model.springs.pairs[s].map(|p| p as usize);
+        self.model.spring(s).force(self.x[i], self.x[j], self.v[i], self.v[j])
+    }
+    fn hinge(&self, h: usize) -> [Vec3; 4] {
+        let bending = self.model.hinges.view();
+        let moment = self.model.hinge_moment(h, |f| bending.face_moments(f, self.delta));
+        bending.hinge_forces(h, self.x, moment)
+    }
+    fn membrane(&self, m: usize) -> [Vec3; 3] {
+        let membranes = self.model.membranes;
+        membranes.elements[m].forces(&membranes.material, membranes.indices[m].map(|p| self.x[p as usize]))
+    }
+    fn wind(&self, t: usize) -> Vec3 {
+        let tri = self.model.triangles[t].map(|p| p as usize);
+        triangle_wind_force(tri.map(|p| self.x[p]), tri.map(|p| self.v[p]), self.wind, self.model.air.wind_drag)
+    }
+}
+
 /// Elements whose local blocks are computed at once: enough to share among the threads,
 /// few enough that the buffer stays small (two chunks of bending faces are 0.66 MB; with
 /// 1 024 a chunk, 2.7 MB, 650 bytes a particle of the 64² hang scene).
@@ -181,8 +239,60 @@ impl ForceModel<'_> {
         let faces = &scratch.face_moment;
         scratch.hinge_moment.resize(hinge_count, 0.0);
         scratch.hinge_moment.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(h, m)| {
-            *m = self.topology.hinge_faces.row(h).iter().map(|&side| faces[side as usize / 3][side as usize % 3]).sum();
+            *m = self.hinge_moment(h, |f| faces[f]);
         });
+    }
+
+    /// Summed moment `∂E/∂θ` of hinge `h` from the moments `face_moment(f)` of its faces.
+    fn hinge_moment(&self, h: usize, face_moment: impl Fn(usize) -> [f32; 3]) -> f32 {
+        self.topology.hinge_faces.row(h).iter().map(|&side| face_moment(side as usize / 3)[side as usize % 3]).sum()
+    }
+
+    /// Total force on particle `i` at velocity `v` [m/s], the forces of its elements
+    /// given by `elements` (see [`ElementForces`]), user forces left out.
+    fn particle_force(&self, i: usize, v: Vec3, rate: f32, elements: &impl ElementForces) -> Vec3 {
+        let topology = self.topology;
+        let mass = 1.0 / self.inv_mass[i];
+        let mut total = mass * (self.gravity - rate * v);
+        for &s in topology.particle_springs.row(i) {
+            let sf = elements.spring(s as usize);
+            total += if self.springs.pairs[s as usize][0] as usize == i { sf } else { -sf };
+        }
+        for &corner in topology.particle_hinges.row(i) {
+            total += elements.hinge(corner as usize / 4)[corner as usize % 4];
+        }
+        for &corner in topology.particle_membranes.row(i) {
+            total += elements.membrane(corner as usize / 3)[corner as usize % 3];
+        }
+        if self.air.wind_drag > 0.0 {
+            for &t in topology.particle_triangles.row(i) {
+                total += elements.wind(t as usize);
+            }
+        }
+        total
+    }
+
+    /// The total force on each of `particles` at state `(x, v)` and time `t` [N], as
+    /// [`ForceModel::eval`] gives it, from their own elements alone: the pins' reaction
+    /// without evaluating the whole cloth. `scratch` takes the hinge angles.
+    pub fn force_on<'p>(
+        &'p self,
+        particles: &'p [u32],
+        x: &'p [Vec3],
+        v: &'p [Vec3],
+        t: f32,
+        scratch: &'p mut ForceScratch,
+    ) -> impl Iterator<Item = Vec3> + 'p {
+        let bending = self.hinges.view();
+        scratch.hinge_delta.resize(self.hinges.vertices.len(), 0.0);
+        bending.angles(x, &mut scratch.hinge_delta);
+        let local = LocalForces { model: self, x, v, wind: self.air.wind_at(t), delta: &scratch.hinge_delta };
+        let rate = self.damping_rate();
+        particles.iter().map(move |&p| {
+            let i = p as usize;
+            let user = self.user_forces.iter().filter(|(q, _)| *q == p).map(|(_, f)| *f);
+            user.fold(self.particle_force(i, v[i], rate, &local), |total, f| total + f)
+        })
     }
 
     /// Total force on every particle at state `(x, v)` and time `t` [s], written to `out`.
@@ -217,26 +327,8 @@ impl ForceModel<'_> {
 
         let scratch = &*scratch;
         let rate = self.damping_rate();
-        let topology = self.topology;
         out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, f)| {
-            let mass = 1.0 / self.inv_mass[i];
-            let mut total = mass * (self.gravity - rate * v[i]);
-            for &s in topology.particle_springs.row(i) {
-                let sf = scratch.spring[s as usize];
-                total += if self.springs.pairs[s as usize][0] as usize == i { sf } else { -sf };
-            }
-            for &corner in topology.particle_hinges.row(i) {
-                total += scratch.hinge[corner as usize / 4][corner as usize % 4];
-            }
-            for &corner in topology.particle_membranes.row(i) {
-                total += scratch.membrane[corner as usize / 3][corner as usize % 3];
-            }
-            if with_wind {
-                for &t in topology.particle_triangles.row(i) {
-                    total += scratch.triangle[t as usize];
-                }
-            }
-            *f = total;
+            *f = self.particle_force(i, v[i], rate, scratch);
         });
         for &(particle, force) in self.user_forces {
             out[particle as usize] += force;
@@ -489,6 +581,44 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The force on a few particles from their own elements is bit for bit the force the
+    /// whole cloth's evaluation gives them, with every element kind, wind, gusts and user
+    /// forces (one particle pushed twice).
+    #[test]
+    fn the_force_on_a_few_particles_is_the_whole_evaluation_s() {
+        let (particles, springs, triangles, hinges, membranes) = cloth();
+        let topology = ClothTopology::build(&particles.inv_mass, &springs, &triangles, &hinges, &membranes, &[], 1);
+        let user_forces = [(5, Vec3::new(0.1, 0.2, -0.3)), (9, Vec3::X), (5, Vec3::new(-0.02, 0.0, 0.7))];
+        let air = Air {
+            drag: 0.7,
+            area_damping: 0.1,
+            wind: Vec3::new(1.0, 0.5, 3.0),
+            wind_drag: 0.6,
+            gust: Some(Gust { amplitude: 0.4, period_s: 1.3 }),
+        };
+        let model = ForceModel {
+            inv_mass: &particles.inv_mass,
+            density: 0.2,
+            springs: &springs,
+            triangles: &triangles.indices,
+            hinges: &hinges,
+            membranes: &membranes,
+            topology: &topology,
+            gravity: Vec3::new(0.0, -9.81, 0.0),
+            air,
+            user_forces: &user_forces,
+        };
+        let (x, v) = (&particles.position, &particles.velocity);
+        let mut whole = vec![Vec3::ZERO; x.len()];
+        model.eval(x, v, 0.4, &mut ForceScratch::default(), &mut whole);
+        let chosen = [0, 5, 6, 9, 15];
+        let mut scratch = ForceScratch::default();
+        let local: Vec<Vec3> = model.force_on(&chosen, x, v, 0.4, &mut scratch).collect();
+        let expected: Vec<Vec3> = chosen.iter().map(|&p| whole[p as usize]).collect();
+        assert_eq!(local, expected);
+        assert!(expected.iter().all(|f| f.length() > 0.0));
     }
 
     #[test]

@@ -11,8 +11,8 @@ pub fn hold_pins(particles: &[u32], targets: &[Vec3], x: &mut [Vec3], v: &mut [V
 }
 
 /// Total force the pins carry [N]: the reaction that keeps the pinned particles at rest
-/// against the other forces on them, `−Σ f_i` over pinned `i`. At equilibrium its
-/// magnitude is the weight of everything that hangs from the pins.
-pub fn pin_reaction(particles: &[u32], force: &[Vec3]) -> Vec3 {
-    -particles.iter().map(|&p| force[p as usize]).sum::<Vec3>()
+/// against the other forces on them, `−Σ f_i` over the `forces` on pinned `i`. At
+/// equilibrium its magnitude is the weight of everything that hangs from the pins.
+pub fn pin_reaction(forces: impl Iterator<Item = Vec3>) -> Vec3 {
+    -forces.sum::<Vec3>()
 }
