@@ -74,7 +74,8 @@ pub fn triangle_wind_force(x: [Vec3; 3], v: [Vec3; 3], wind: Vec3, wind_drag: f3
 pub struct ForceScratch {
     spring: Vec<Vec3>,
     triangle: Vec<Vec3>,
-    hinge: Vec<[Vec3; 4]>,
+    /// Each hinge's angle gradient, for its forces and for the faces' derivatives.
+    hinge_gradient: Vec<[Vec3; 4]>,
     hinge_delta: Vec<f32>,
     hinge_moment: Vec<f32>,
     face_moment: Vec<[f32; 3]>,
@@ -102,7 +103,7 @@ impl ElementForces for ForceScratch {
         self.spring[s]
     }
     fn hinge(&self, h: usize) -> [Vec3; 4] {
-        self.hinge[h]
+        self.hinge_gradient[h].map(|g| -self.hinge_moment[h] * g)
     }
     fn membrane(&self, m: usize) -> [Vec3; 3] {
         self.membrane[m]
@@ -304,12 +305,8 @@ impl ForceModel<'_> {
         });
 
         self.bending_moments(x, scratch);
-        let bending = self.hinges.view();
-        let moments = &scratch.hinge_moment;
-        scratch.hinge.resize(self.hinges.vertices.len(), [Vec3::ZERO; 4]);
-        scratch.hinge.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(h, f)| {
-            *f = bending.hinge_forces(h, x, moments[h]);
-        });
+        scratch.hinge_gradient.resize(self.hinges.vertices.len(), [Vec3::ZERO; 4]);
+        self.hinges.view().gradients(x, &mut scratch.hinge_gradient);
 
         let material = &self.membranes.material;
         scratch.membrane.resize(self.membranes.indices.len(), [Vec3::ZERO; 3]);
@@ -368,10 +365,10 @@ impl ForceModel<'_> {
             }
         }
         let bending = self.hinges.view();
-        let ForceScratch { hinge_delta, hinge_moment, local_blocks, .. } = scratch;
+        let ForceScratch { hinge_delta, hinge_gradient, hinge_moment, local_blocks, .. } = scratch;
         let faces = |f: usize| self.hinges.faces[f].vertices;
         add_elements(dfdx, pattern, &topology.face_positions, faces, local_blocks, |f| {
-            bending.face_jacobian(f, x, hinge_delta)
+            bending.face_jacobian(f, hinge_gradient, hinge_delta)
         });
         if !definite {
             let hinges = |h: usize| self.hinges.vertices[h];

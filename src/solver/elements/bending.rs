@@ -148,6 +148,14 @@ impl BendingSurface<'_> {
         std::array::from_fn(|k| face.area * moment.dot(face.coefficients[k]))
     }
 
+    /// Each hinge's angle gradient `∂θ_h/∂x` over its four vertices [1/m], written to
+    /// `gradients`, in parallel.
+    pub fn gradients(&self, x: &[Vec3], gradients: &mut [[Vec3; 4]]) {
+        gradients.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(h, g)| {
+            *g = hinge_gradient(self.hinges[h].map(|p| x[p as usize]));
+        });
+    }
+
     /// Forces of hinge `h` on its four vertices [N] for the summed moment `moment`
     /// `∂E/∂θ_h`.
     pub fn hinge_forces(&self, h: usize, x: &[Vec3], moment: f32) -> [Vec3; 4] {
@@ -155,15 +163,16 @@ impl BendingSurface<'_> {
     }
 
     /// The Gauss–Newton blocks `−A ∇κᵀ W″ ∇κ` of face `f` over its (up to six) vertices
-    /// [N/m]: negative semi-definite for any law with `W″ ≥ 0`.
-    pub fn face_jacobian(&self, f: usize, x: &[Vec3], delta: &[f32]) -> [[Mat3; 6]; 6] {
+    /// [N/m], from the hinges' angles away from rest `delta` and their `gradients` (see
+    /// [`BendingSurface::gradients`]; each hinge serves two faces, and the forces need them
+    /// too): negative semi-definite for any law with `W″ ≥ 0`.
+    pub fn face_jacobian(&self, f: usize, gradients: &[[Vec3; 4]], delta: &[f32]) -> [[Mat3; 6]; 6] {
         let face = &self.faces[f];
         let (_, _, tangent) = self.rigidity.density(self.law, face.curvature(delta));
         // ∇κ by vertex: column c of `gradient[a]` is ∂κ_c/∂x_a.
         let mut gradient = [Mat3::ZERO; 6];
         for k in (0..3).filter(|&k| face.hinges[k] != NO_HINGE) {
-            let h = face.hinges[k] as usize;
-            let g = hinge_gradient(self.hinges[h].map(|p| x[p as usize]));
+            let g = gradients[face.hinges[k] as usize];
             for (corner, &local) in face.corners[k].iter().enumerate() {
                 gradient[local as usize] += outer(g[corner], face.coefficients[k]);
             }
@@ -271,6 +280,8 @@ mod tests {
             let n = x.len();
             let mut delta = vec![0.0; bending.vertices.len()];
             view.angles(&x, &mut delta);
+            let mut gradients = vec![[Vec3::ZERO; 4]; bending.vertices.len()];
+            view.gradients(&x, &mut gradients);
             let mut moments = vec![0.0; bending.vertices.len()];
             let mut jacobian = vec![vec![Mat3::ZERO; n]; n];
             for f in 0..bending.faces.len() {
@@ -280,7 +291,7 @@ mod tests {
                         moments[face.hinges[k] as usize] += m;
                     }
                 }
-                let blocks = view.face_jacobian(f, &x, &delta);
+                let blocks = view.face_jacobian(f, &gradients, &delta);
                 let count = face.vertices.iter().collect::<std::collections::BTreeSet<_>>().len();
                 for a in 0..count {
                     for b in 0..count {
