@@ -492,50 +492,74 @@ mod tests {
         BendingDesc, BendingLawDesc, ClothMaterial, MembraneDesc, Particles, SpringCoefficients, Triangles,
     };
 
-    /// A 4 × 4 cloth with every element kind, deformed and moving, in drag.
-    fn cloth() -> (Particles, Springs, Triangles, BendingHinges, MembraneTriangles) {
-        let spring = Some(SpringCoefficients { stiffness: 40.0, damping: 0.3 });
-        let material = ClothMaterial {
-            density: 0.2,
-            stretch: spring,
-            shear: spring,
-            bend: None,
-            membrane: Some(MembraneDesc::Anisotropic { d1: 300.0, d2: 200.0, d3: 50.0, d4: 30.0 }),
-            bending: Some(BendingDesc {
-                warp: 2e-3,
-                weft: 1e-3,
-                twist: None,
-                law: BendingLawDesc::Zheng { kappa0: 30.0 },
-            }),
-        };
-        let mut data = build_grid((0.3, 0.3), (4, 4), Affine3A::IDENTITY, &material);
-        data.add_surface_elements(&material, Vec3::new(1.0, 0.3, 0.0).normalize());
-        let particles = &mut data.particles;
-        for (i, (x, v)) in particles.position.iter_mut().zip(particles.velocity.iter_mut()).enumerate() {
-            let f = i as f32;
-            *x += Vec3::new(0.01 * (f * 1.3).sin(), 0.012 * (f * 0.7).cos(), 0.3 * x.x * x.x + 0.02 * (f * 2.1).sin());
-            *v = Vec3::new((f * 0.9).cos(), (f * 1.7).sin(), 0.5 * (f * 0.4).cos());
+    /// A cloth and its topology, from which a test borrows its force model.
+    struct Fixture {
+        particles: Particles,
+        springs: Springs,
+        triangles: Triangles,
+        hinges: BendingHinges,
+        membranes: MembraneTriangles,
+        topology: ClothTopology,
+    }
+
+    impl Fixture {
+        /// A 4 × 4 cloth with every element kind, deformed and moving.
+        fn new() -> Self {
+            let spring = Some(SpringCoefficients { stiffness: 40.0, damping: 0.3 });
+            let material = ClothMaterial {
+                density: 0.2,
+                stretch: spring,
+                shear: spring,
+                bend: None,
+                membrane: Some(MembraneDesc::Anisotropic { d1: 300.0, d2: 200.0, d3: 50.0, d4: 30.0 }),
+                bending: Some(BendingDesc {
+                    warp: 2e-3,
+                    weft: 1e-3,
+                    twist: None,
+                    law: BendingLawDesc::Zheng { kappa0: 30.0 },
+                }),
+            };
+            let mut data = build_grid((0.3, 0.3), (4, 4), Affine3A::IDENTITY, &material);
+            data.add_surface_elements(&material, Vec3::new(1.0, 0.3, 0.0).normalize());
+            let particles = &mut data.particles;
+            for (i, (x, v)) in particles.position.iter_mut().zip(particles.velocity.iter_mut()).enumerate() {
+                let f = i as f32;
+                *x += Vec3::new(
+                    0.01 * (f * 1.3).sin(),
+                    0.012 * (f * 0.7).cos(),
+                    0.3 * x.x * x.x + 0.02 * (f * 2.1).sin(),
+                );
+                *v = Vec3::new((f * 0.9).cos(), (f * 1.7).sin(), 0.5 * (f * 0.4).cos());
+            }
+            let (particles, springs, triangles, hinges, membranes) =
+                (data.particles, data.springs, data.triangles, data.hinges, data.membranes);
+            let topology = ClothTopology::build(&particles.inv_mass, &springs, &triangles, &hinges, &membranes, &[], 1);
+            Self { particles, springs, triangles, hinges, membranes, topology }
         }
-        (data.particles, data.springs, data.triangles, data.hinges, data.membranes)
+
+        /// The cloth's forces in `air`, under gravity, with `user_forces`.
+        fn model<'a>(&'a self, air: Air, user_forces: &'a [(u32, Vec3)]) -> ForceModel<'a> {
+            ForceModel {
+                inv_mass: &self.particles.inv_mass,
+                density: 0.2,
+                springs: &self.springs,
+                triangles: &self.triangles.indices,
+                hinges: &self.hinges,
+                membranes: &self.membranes,
+                topology: &self.topology,
+                gravity: Vec3::new(0.0, -9.81, 0.0),
+                air,
+                user_forces,
+            }
+        }
     }
 
     #[test]
     fn assembled_derivatives_match_differences_of_the_whole_force_model() {
-        let (particles, springs, triangles, hinges, membranes) = cloth();
-        let topology = ClothTopology::build(&particles.inv_mass, &springs, &triangles, &hinges, &membranes, &[], 1);
-        let model = ForceModel {
-            inv_mass: &particles.inv_mass,
-            density: 0.2,
-            springs: &springs,
-            triangles: &triangles.indices,
-            hinges: &hinges,
-            membranes: &membranes,
-            topology: &topology,
-            gravity: Vec3::new(0.0, -9.81, 0.0),
-            air: Air { drag: 0.7, area_damping: 0.1, ..Air::default() },
-            user_forces: &[],
-        };
-        let (x, v) = (&particles.position, &particles.velocity);
+        let fixture = Fixture::new();
+        let (topology, model) =
+            (&fixture.topology, fixture.model(Air { drag: 0.7, area_damping: 0.1, ..Air::default() }, &[]));
+        let (x, v) = (&fixture.particles.position, &fixture.particles.velocity);
         let n = x.len();
         let mut scratch = ForceScratch::default();
         let (mut force, mut dfdx, mut dfdv) =
@@ -584,9 +608,8 @@ mod tests {
     /// whole cloth's evaluation gives them, with every element kind, wind, gusts and user
     /// forces (one particle pushed twice).
     #[test]
-    fn the_force_on_a_few_particles_is_the_whole_evaluation_s() {
-        let (particles, springs, triangles, hinges, membranes) = cloth();
-        let topology = ClothTopology::build(&particles.inv_mass, &springs, &triangles, &hinges, &membranes, &[], 1);
+    fn the_force_on_a_few_particles_matches_the_whole_evaluation() {
+        let fixture = Fixture::new();
         let user_forces = [(5, Vec3::new(0.1, 0.2, -0.3)), (9, Vec3::X), (5, Vec3::new(-0.02, 0.0, 0.7))];
         let air = Air {
             drag: 0.7,
@@ -595,19 +618,8 @@ mod tests {
             wind_drag: 0.6,
             gust: Some(Gust { amplitude: 0.4, period_s: 1.3 }),
         };
-        let model = ForceModel {
-            inv_mass: &particles.inv_mass,
-            density: 0.2,
-            springs: &springs,
-            triangles: &triangles.indices,
-            hinges: &hinges,
-            membranes: &membranes,
-            topology: &topology,
-            gravity: Vec3::new(0.0, -9.81, 0.0),
-            air,
-            user_forces: &user_forces,
-        };
-        let (x, v) = (&particles.position, &particles.velocity);
+        let model = fixture.model(air, &user_forces);
+        let (x, v) = (&fixture.particles.position, &fixture.particles.velocity);
         let mut whole = vec![Vec3::ZERO; x.len()];
         model.eval(x, v, 0.4, &mut ForceScratch::default(), &mut whole);
         let chosen = [0, 5, 6, 9, 15];
