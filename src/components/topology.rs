@@ -162,8 +162,6 @@ pub struct SolverWorkspace {
     pub integrator: IntegratorWorkspace,
     /// Per-element force buffers of the force model.
     pub forces: ForceScratch,
-    /// Forces at an intermediate state [N], for stage evaluations and probes.
-    pub force: Vec<Vec3>,
     /// Positions at the start of the strain limiter's projection [m].
     pub positions: Vec<Vec3>,
     /// Positions at the start of the current step [m], for continuous contact.
