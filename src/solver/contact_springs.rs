@@ -88,14 +88,18 @@ impl ContactSpring {
     /// The force on the pair's first side at `(x, v)`: the spring's push, `k (gap − d) n`,
     /// and friction, `−c (I − n nᵀ) v_rel`. Vertex `k` takes `w_k` times it.
     fn force(&self, x: &[Vec3], v: &[Vec3]) -> Vec3 {
-        let velocity = self.stencil.relative(v);
-        self.push(x) * self.normal - self.drag * (velocity - velocity.dot(self.normal) * self.normal)
+        self.push(x) * self.normal - self.drag * self.slip(v)
+    }
+
+    /// The pair's relative velocity across the normal at `v` [m/s].
+    fn slip(&self, v: &[Vec3]) -> Vec3 {
+        let relative = self.stencil.relative(v);
+        relative - relative.dot(self.normal) * self.normal
     }
 
     /// The pair's speed across the normal at `v`, no less than [`STATIC_SPEED`] [m/s].
     fn sliding(&self, v: &[Vec3]) -> f32 {
-        let relative = self.stencil.relative(v);
-        (relative - relative.dot(self.normal) * self.normal).length().max(STATIC_SPEED)
+        self.slip(v).length().max(STATIC_SPEED)
     }
 
     /// Sets the friction to Coulomb's for the push `push` [N] and the pair's velocities
