@@ -67,7 +67,7 @@ pub fn measure_probes(
         strain = strain.max(max_strain(&particles.position, &particles.rest_position, model.springs, model.membranes));
         if !pins.is_empty() {
             let (x, v) = (&particles.position, &particles.velocity);
-            pin_force += pin_reaction(model.force_on(&pins.particles, x, v, environment.time(), forces));
+            pin_force += pin_reaction(model.force_on(pins.particles.iter().copied(), x, v, environment.time(), forces));
         }
     }
     probes.set("kinetic_energy_j", kinetic);

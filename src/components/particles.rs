@@ -15,7 +15,9 @@ pub struct Particles {
     pub inv_mass: Vec<f32>,
     /// Rest position [m] in the cloth's initial placement: the shape the cloth was cut in.
     pub rest_position: Vec<Vec3>,
-    /// Force accumulated on each particle in the current step [N].
+    /// Force on each particle at the start of the current step [N]. An implicit
+    /// integrator, which evaluates its forces within the step, may leave it zero on the
+    /// particles not touching a body (`systems/forces.rs`).
     pub force: Vec<Vec3>,
 }
 

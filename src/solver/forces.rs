@@ -278,7 +278,7 @@ impl ForceModel<'_> {
     /// without evaluating the whole cloth. `scratch` takes the hinge angles.
     pub fn force_on<'p>(
         &'p self,
-        particles: &'p [u32],
+        particles: impl IntoIterator<Item = u32> + 'p,
         x: &'p [Vec3],
         v: &'p [Vec3],
         t: f32,
@@ -289,7 +289,7 @@ impl ForceModel<'_> {
         bending.angles(x, &mut scratch.hinge_delta);
         let local = LocalForces { model: self, x, v, wind: self.air.wind_at(t), delta: &scratch.hinge_delta };
         let rate = self.damping_rate();
-        particles.iter().map(move |&p| {
+        particles.into_iter().map(move |p| {
             let i = p as usize;
             let user = self.user_forces.iter().filter(|(q, _)| *q == p).map(|(_, f)| *f);
             user.fold(self.particle_force(i, v[i], rate, &local), |total, f| total + f)
@@ -624,7 +624,7 @@ mod tests {
         model.eval(x, v, 0.4, &mut ForceScratch::default(), &mut whole);
         let chosen = [0, 5, 6, 9, 15];
         let mut scratch = ForceScratch::default();
-        let local: Vec<Vec3> = model.force_on(&chosen, x, v, 0.4, &mut scratch).collect();
+        let local: Vec<Vec3> = model.force_on(chosen.iter().copied(), x, v, 0.4, &mut scratch).collect();
         let expected: Vec<Vec3> = chosen.iter().map(|&p| whole[p as usize]).collect();
         assert_eq!(local, expected);
         assert!(expected.iter().all(|f| f.length() > 0.0));
