@@ -146,7 +146,17 @@ impl ClothTopology {
             face_positions: hinges.faces.iter().map(|f| pattern.stencil_positions(f.vertices)).collect(),
             membrane_positions: membranes.indices.iter().map(|&t| pattern.stencil_positions(t)).collect(),
             colouring: Colouring::greedy(&pattern),
-            hierarchy: Hierarchy::build(&pattern),
+            hierarchy: Hierarchy::build(
+                &pattern,
+                BlockPattern::from_stencils(
+                    count,
+                    springs
+                        .pairs
+                        .iter()
+                        .map(|p| &p[..])
+                        .chain(triangles.indices.iter().chain(&membranes.indices).map(|t| &t[..])),
+                ),
+            ),
             pattern,
             free_inv_mass,
             builds,

@@ -689,7 +689,7 @@ fn conjugate_gradient(
     // z = M⁻¹ r, returning r·z.
     let mut precondition = |r: &[Vec3], z: &mut [Vec3], partials: &mut Vec<f64>| {
         if let Some(hierarchy) = hierarchy {
-            multigrid.apply(hierarchy, pattern, system, filter, r, z);
+            multigrid.apply(hierarchy, filter, r, z);
         }
         let jacobi = hierarchy.is_none().then_some(&*preconditioner);
         fused(z, r, partials, |i, z, r| {

@@ -118,6 +118,10 @@ const REBUILD_RUN: u32 = 32;
 /// patterns of the prolongators and coarse matrices. Depends only on the finest pattern.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Hierarchy {
+    /// The finest level's pattern: the couplings of the particles that share a triangle or
+    /// a spring, which the system's pattern holds with the bending's, across an edge, as
+    /// well (see [`Multigrid::prepare`]).
+    fine: BlockPattern,
     /// From the finest level down, each coarsening of the level above.
     coarsenings: Vec<Coarsening>,
     /// Nodes of the coarsest level.
@@ -149,12 +153,13 @@ struct Coarsening {
 }
 
 impl Hierarchy {
-    /// Groups the nodes of `pattern` level by level until [`COARSEST_NODES`] remain or the
-    /// grouping stalls: the particles by their neighbourhoods, then the pairs of nodes of
-    /// each aggregate by the neighbourhoods of either.
-    pub fn build(pattern: &BlockPattern) -> Self {
+    /// Groups the nodes of `fine`, the finest level's pattern, level by level until
+    /// [`COARSEST_NODES`] remain or the grouping stalls: the particles by their
+    /// neighbourhoods, then the pairs of nodes of each aggregate by the neighbourhoods of
+    /// either.
+    pub fn build(neighbours: &BlockPattern, fine: BlockPattern) -> Self {
         let mut coarsenings: Vec<Coarsening> = Vec::new();
-        let mut current = pattern.clone();
+        let mut current = fine.clone();
         while current.rows() > COARSEST_NODES {
             let paired = !coarsenings.is_empty();
             let point = |k: u32| if paired { k / 2 } else { k };
@@ -163,7 +168,7 @@ impl Hierarchy {
                     row.extend(current.row(2 * p).iter().chain(current.row(2 * p + 1)).map(|&k| point(k)));
                 }))
             } else {
-                aggregate(&current)
+                aggregate(neighbours)
             };
             if (2 * count) as f32 > MIN_REDUCTION * current.rows() as f32 {
                 break;
@@ -205,7 +210,7 @@ impl Hierarchy {
                 coarse,
             });
         }
-        Self { coarsest: current.rows(), coarsenings }
+        Self { fine, coarsest: current.rows(), coarsenings }
     }
 
     /// Nodes per level, finest first.
@@ -433,6 +438,9 @@ fn cholesky_solve(f: &[f64], y: &mut [f64]) {
 /// and applied by [`Multigrid::apply`]; kept from system to system.
 #[derive(Debug, Clone, Default)]
 pub struct Multigrid {
+    /// The finest level's matrix: the system over the hierarchy's finest pattern
+    /// ([`lump`]).
+    fine: BlockMatrix,
     /// Per level that has a coarser one, finest first.
     levels: Vec<Level>,
     /// Matrices of the levels below the finest (whose matrix is the system).
@@ -620,6 +628,88 @@ fn fill_row_range(
         || fill_row_range(pattern, size, rows.start..middle, left, group),
         || fill_row_range(pattern, size, middle..rows.end, right, group),
     );
+}
+
+/// Sets `out` to `system` (over `pattern`) over `fine`, a pattern of fewer blocks: the
+/// blocks `fine` has (zero where `pattern` has none), and each block `B` it leaves out
+/// moved onto its row's diagonal ([`lumped`]), so that a rigid translation meets the same
+/// force as in the system and the coarse levels keep the sheet's soft modes. On the hang
+/// bench scenes the bending's couplings across an edge, so moved, cost no iterations
+/// (6.9, 7.9 and 13.3 a frame at 64², 128² and 256² against 7.6, 10.3 and 13.7 with the
+/// whole system, 30 frames); their Frobenius norms on the diagonal instead doubled them
+/// at 256², where the bending outweighs the mass a thousandfold out of the sheet's plane.
+fn lump(pattern: &BlockPattern, system: &BlockMatrix, fine: &BlockPattern, out: &mut BlockMatrix) {
+    fill_rows(fine, 1, &mut out.blocks, |i, columns, blocks| {
+        let (mut at, mut moved) = (0, Mat3::ZERO);
+        for k in pattern.slots(i) {
+            let (column, block) = (pattern.columns[k], system.blocks[k]);
+            while at < columns.len() && columns[at] < column {
+                at += 1;
+            }
+            match columns.get(at) == Some(&column) {
+                true => blocks[at] = block,
+                false => moved += lumped(block),
+            }
+        }
+        let diagonal = columns.binary_search(&(i as u32)).expect("every row has its diagonal");
+        blocks[diagonal] += moved;
+    });
+}
+
+/// What an off-diagonal block `B` (and `Bᵀ`, its mirror) adds to the diagonal of its row
+/// when it is left out: its symmetric part `S`, which keeps the row's sum, widened by
+/// `(2d + ‖W‖) I`, `W` its antisymmetric part and `−d` a lower bound on `S`'s
+/// eigenvalues where they may be below zero ([`deficit`]). The pair's change
+/// `[S + cI, −B; −Bᵀ, S + cI]` is then `[T, −T; −T, T]` with `T = S + dI ⪰ 0`, plus
+/// `[(c − d)I, dI − W; dI + W, (c − d)I]`, positive semi-definite for `c ≥ 2d + ‖W‖`: the
+/// lumped matrix is never below the system, so positive definite with it, and a V-cycle
+/// over it a preconditioner still.
+fn lumped(block: Mat3) -> Mat3 {
+    let symmetric = (block + block.transpose()) * 0.5;
+    let skew = block - symmetric;
+    symmetric + Mat3::from_diagonal(Vec3::splat(2.0 * deficit(symmetric) + frobenius(skew)))
+}
+
+/// A `d ≥ 0` with `S + d I` positive semi-definite, for a symmetric `S`: the first of
+/// [`DEFICIT_STEPS`] times `‖S‖` for which Sylvester's criterion (every principal minor
+/// non-negative) holds, else Gershgorin's bound. The bending's blocks are near rank one,
+/// `a bᵀ` with `a` and `b` nearly parallel, whose least eigenvalue
+/// `(a·b − |a||b|) / 2` is a small part of `‖S‖`, where Gershgorin's bound can be a third
+/// of it: on hang_256 that took 28.6 iterations a frame against 13.3. (Rounding in the
+/// minors may pass a shifted block whose least eigenvalue is a rounding error below
+/// zero, far below the mass on the diagonal.)
+fn deficit(s: Mat3) -> f32 {
+    let norm = frobenius(s);
+    let semidefinite = |m: Mat3| {
+        let (a, b, c) = (m.x_axis, m.y_axis, m.z_axis);
+        [a.x, b.y, c.z].iter().all(|&d| d >= 0.0)
+            && a.x * b.y - a.y * a.y >= 0.0
+            && a.x * c.z - a.z * a.z >= 0.0
+            && b.y * c.z - b.z * b.z >= 0.0
+            && m.determinant() >= 0.0
+    };
+    DEFICIT_STEPS
+        .iter()
+        .map(|&step| step * norm)
+        .find(|&d| semidefinite(s + Mat3::from_diagonal(Vec3::splat(d))))
+        .unwrap_or_else(|| {
+            let rows = s.transpose();
+            let gershgorin = [rows.x_axis, rows.y_axis, rows.z_axis]
+                .iter()
+                .enumerate()
+                .map(|(r, row)| 2.0 * row[r] - row.abs().element_sum())
+                .fold(f32::INFINITY, f32::min);
+            (-gershgorin).max(0.0)
+        })
+}
+
+/// The shifts, as parts of a block's norm, that [`deficit`] tries, smallest first: on
+/// hang_256, 0.01 and 0.1 alone gave 17.5 iterations a frame, these 13.3.
+const DEFICIT_STEPS: [f32; 4] = [0.003, 0.01, 0.03, 0.1];
+
+/// The Frobenius norm, which bounds the singular values.
+fn frobenius(m: Mat3) -> f32 {
+    (m.x_axis.length_squared() + m.y_axis.length_squared() + m.z_axis.length_squared()).sqrt()
 }
 
 /// Adds `block` to the block of `row` (sorted columns, with their `blocks`) in `column`,
@@ -868,6 +958,12 @@ impl Multigrid {
     /// a symmetric positive definite V-cycle (a Galerkin matrix of an older system is
     /// still positive definite, and the smoother is this system's), only a weaker one,
     /// which [`Multigrid::record`] notices.
+    ///
+    /// The finest level is not the system itself but the system over the hierarchy's
+    /// pattern, the couplings of the bending across an edge lumped onto the diagonal
+    /// ([`lump`]): a third of the blocks (7 of 19 a row on a regular sheet), for each of
+    /// the cycle's smoothing products and for the Galerkin product, at a frame-sized step
+    /// where the bending is some 10⁻⁴ of the membrane's stiffness.
     pub fn prepare(
         &mut self,
         hierarchy: &Hierarchy,
@@ -876,6 +972,8 @@ impl Multigrid {
         filter: &[Mat3],
         positions: &[Vec3],
     ) {
+        lump(pattern, system, &hierarchy.fine, &mut self.fine);
+        let pattern = &hierarchy.fine;
         let built_for = |levels: &[Level]| {
             levels.len() == hierarchy.coarsenings.len()
                 && levels
@@ -887,10 +985,10 @@ impl Multigrid {
         let current = !self.rebuild && built_for(&self.levels);
         match self.levels.first_mut() {
             Some(finest) if current => {
-                finest.smoother(Operator { pattern, matrix: system, filter: Some(filter) }, false);
+                finest.smoother(Operator { pattern, matrix: &self.fine, filter: Some(filter) }, false);
             }
             // Stale, another hierarchy, or a single level (the system is the coarsest).
-            _ => self.setup(hierarchy, pattern, system, filter, positions),
+            _ => self.setup(hierarchy, filter, positions),
         }
     }
 
@@ -915,22 +1013,16 @@ impl Multigrid {
         self.tried_stale = true;
     }
 
-    /// Builds the levels' smoothers, prolongators and matrices, and the coarsest factor.
-    fn setup(
-        &mut self,
-        hierarchy: &Hierarchy,
-        pattern: &BlockPattern,
-        system: &BlockMatrix,
-        filter: &[Mat3],
-        positions: &[Vec3],
-    ) {
+    /// Builds the levels' smoothers, prolongators and matrices, and the coarsest factor,
+    /// from the finest level's matrix.
+    fn setup(&mut self, hierarchy: &Hierarchy, filter: &[Mat3], positions: &[Vec3]) {
         self.rebuild = false;
         self.fresh_iterations = None;
         self.tried_stale = false;
         let depth = hierarchy.coarsenings.len();
         self.levels.resize_with(depth, Level::default);
         self.matrices.resize_with(depth, BlockMatrix::default);
-        let finest = Operator { pattern, matrix: system, filter: Some(filter) };
+        let finest = Operator { pattern: &hierarchy.fine, matrix: &self.fine, filter: Some(filter) };
         for (l, coarsening) in hierarchy.coarsenings.iter().enumerate() {
             let (above, below) = self.matrices.split_at_mut(l);
             let a = match l {
@@ -964,16 +1056,8 @@ impl Multigrid {
 
     /// One symmetric V-cycle on the finest level's residual `r` (filtered), giving the
     /// correction `z` (within the filter).
-    pub fn apply(
-        &mut self,
-        hierarchy: &Hierarchy,
-        pattern: &BlockPattern,
-        system: &BlockMatrix,
-        filter: &[Mat3],
-        r: &[Vec3],
-        z: &mut [Vec3],
-    ) {
-        let finest = Operator { pattern, matrix: system, filter: Some(filter) };
+    pub fn apply(&mut self, hierarchy: &Hierarchy, filter: &[Mat3], r: &[Vec3], z: &mut [Vec3]) {
+        let finest = Operator { pattern: &hierarchy.fine, matrix: &self.fine, filter: Some(filter) };
         cycle(&mut self.levels, &hierarchy.coarsenings, &self.matrices, &mut self.coarsest, finest, r, z);
     }
 }
@@ -1142,7 +1226,7 @@ mod tests {
     fn the_coarse_levels_move_the_sheet_rigidly() {
         let n = 32;
         let (pattern, _) = sheet(n, 1.0, 1.0);
-        let hierarchy = Hierarchy::build(&pattern);
+        let hierarchy = Hierarchy::build(&pattern, pattern.clone());
         // A sheet bent about one axis, so that no aggregate's points lie on a line.
         let positions: Vec<Vec3> = (0..n * n)
             .map(|p| {
@@ -1179,10 +1263,47 @@ mod tests {
         }
     }
 
+    /// A block left out of the finest level, with its mirror, leaves the lumped matrix
+    /// above the system: `[L, −B; −Bᵀ, L]` is positive semi-definite, `L` what it adds to
+    /// each diagonal; a near-rank-one block (the bending's) adds little beyond its
+    /// symmetric part, and a symmetric positive one (nearly) keeps its row's sum, widened
+    /// by twice the smallest shift, 2 × 0.003 of its norm on each diagonal entry.
+    #[test]
+    fn a_lumped_block_never_lowers_the_matrix() {
+        let block = |seed: u32| Mat3::from_cols(irregular(seed), irregular(seed + 1), irregular(seed + 2));
+        let mut worst: f32 = 0.0;
+        for seed in 0..2000u32 {
+            let b = match seed % 3 {
+                0 => block(7 * seed),
+                // a bᵀ, a and b within a few degrees, as the bending's couplings.
+                1 => {
+                    let a = irregular(seed);
+                    outer(a, a + 0.05 * a.length() * irregular(seed + 9000).normalize())
+                }
+                _ => -outer(irregular(seed), irregular(seed)),
+            };
+            let l = lumped(b);
+            assert_eq!(l, l.transpose(), "the diagonal's change is symmetric");
+            for probe in 0..20 {
+                let (x, y) = (irregular(3 * probe + seed), irregular(3 * probe + seed + 1));
+                let energy = x.dot(l * x) + y.dot(l * y) - 2.0 * x.dot(b * y);
+                worst = worst.min(energy / (x.length_squared() + y.length_squared()) / frobenius(b));
+            }
+            if seed % 3 == 1 {
+                let extra = frobenius(l - (b + b.transpose()) * 0.5) / frobenius(b);
+                assert!(extra < 0.2, "a near-rank-one block widened by {extra} of its norm");
+            }
+        }
+        assert!(worst > -1e-5, "energy {worst} of a block's norm below zero");
+        let a = Vec3::new(0.3, -0.2, 0.9);
+        let kept = lumped(outer(a, a));
+        assert!(frobenius(kept - outer(a, a)) <= 0.011 * frobenius(outer(a, a)), "{kept}");
+    }
+
     #[test]
     fn a_sheet_coarsens_level_by_level_to_a_few_dozen_nodes() {
         let (pattern, _) = sheet(64, 1.0, 1.0);
-        let sizes = Hierarchy::build(&pattern).sizes();
+        let sizes = Hierarchy::build(&pattern, pattern.clone()).sizes();
         assert!(sizes.len() >= 3, "levels {sizes:?}");
         assert!(sizes.windows(2).all(|w| 4 * w[1] <= w[0]), "each level at least 4× coarser: {sizes:?}");
         assert!(sizes.last().is_some_and(|&n| n <= COARSEST_NODES), "coarsest {sizes:?}");
@@ -1192,7 +1313,7 @@ mod tests {
     fn the_v_cycle_is_symmetric_positive_within_the_filter_and_converges_alone() {
         // h²k/m = 10⁴, as cloth at frame-sized steps; two levels below the particles.
         let (pattern, system) = sheet(48, 1.0, 1.0e4);
-        let hierarchy = Hierarchy::build(&pattern);
+        let hierarchy = Hierarchy::build(&pattern, pattern.clone());
         assert!(hierarchy.sizes().len() >= 3, "levels {:?}", hierarchy.sizes());
         let n = pattern.rows();
         let mut filter = vec![Mat3::IDENTITY; n];
@@ -1201,10 +1322,10 @@ mod tests {
         filter[1000] = Mat3::IDENTITY - outer(Vec3::Y, Vec3::Y);
         let mut multigrid = Multigrid::default();
         let positions: Vec<Vec3> = (0..n as u32).map(|p| Vec3::new((p % 48) as f32, (p / 48) as f32, 0.0)).collect();
-        multigrid.setup(&hierarchy, &pattern, &system, &filter, &positions);
+        multigrid.prepare(&hierarchy, &pattern, &system, &filter, &positions);
         let apply = |multigrid: &mut Multigrid, r: &[Vec3]| {
             let mut z = vec![Vec3::ZERO; n];
-            multigrid.apply(&hierarchy, &pattern, &system, &filter, r, &mut z);
+            multigrid.apply(&hierarchy, &filter, r, &mut z);
             z
         };
         let (r1, r2) = (probe(&filter, 1), probe(&filter, 2));
