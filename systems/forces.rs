@@ -86,8 +86,8 @@ pub fn accumulate_forces(
         if solver.integrator.is_implicit() && touching.0.len() * LOCAL_SHARE < particles.len() {
             force.fill(Vec3::ZERO);
             let touched = touching.0.iter().map(|touch| touch.particle);
-            for (touch, total) in touching.0.iter().zip(model.force_on(touched, x, v, t, &mut workspace.forces)) {
-                force[touch.particle as usize] = total;
+            for (p, total) in touched.clone().zip(model.force_on(touched, x, v, t, &mut workspace.forces)) {
+                force[p as usize] = total;
             }
         } else {
             model.eval(x, v, t, &mut workspace.forces, &mut force);

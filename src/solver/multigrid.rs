@@ -677,10 +677,10 @@ fn lumped(block: Mat3) -> Mat3 {
 /// [`DEFICIT_STEPS`] times `‖S‖` for which Sylvester's criterion (every principal minor
 /// non-negative) holds, else Gershgorin's bound. The bending's blocks are near rank one,
 /// `a bᵀ` with `a` and `b` nearly parallel, whose least eigenvalue
-/// `(a·b − |a||b|) / 2` is a small part of `‖S‖`, while Gershgorin's bound on it can be a
-/// third of `‖S‖`: with that bound alone hang_256 took 28.6 iterations a frame, not 13.3. (Rounding in the
-/// minors may pass a shifted block whose least eigenvalue is a rounding error below
-/// zero, far below the mass on the diagonal.)
+/// `(a·b − |a||b|) / 2` is a small part of `‖S‖`, while Gershgorin's bound on it can be
+/// a third of `‖S‖`: with that bound alone hang_256 took 28.6 iterations a frame, not
+/// 13.3. (Rounding in the minors may pass a shifted block whose least eigenvalue is a
+/// rounding error below zero, far below the mass on the diagonal.)
 fn deficit(s: Mat3) -> f32 {
     let norm = frobenius(s);
     let semidefinite = |m: Mat3| {
