@@ -5,8 +5,8 @@
 //! 1. [`scene`] reads a RON scene ([`scene::load_scene`]), checks it and spawns garments
 //!    into a bevy_ecs [`World`](bevy_ecs::world::World) ([`scene::spawn_scene`]), using the
 //!    [`builders`] for grids, meshes and pin selections.
-//! 2. [`schedule`] wires the scheduled [`systems`] into three schedules (frame, substep,
-//!    render) in one place; [`Simulation`] owns the world and runs them.
+//! 2. [`schedule`] wires the scheduled [`systems`] into four schedules (frame, substep,
+//!    probe, render) in one place; [`Simulation`] owns the world and runs them.
 //! 3. The systems are thin adapters over the pure kernels in [`solver`] (forces,
 //!    integrators, constraints, contact, probes), which know nothing of the ECS.
 //! 4. [`io`] writes frames (OBJ, PLY), `summary.json` and `probes.csv`, each file whole or

@@ -1,6 +1,7 @@
 //! The engine as a library: a world built from a scene, stepped a frame at a time.
 
 use std::path::Path;
+use std::time::{Duration, Instant};
 
 use bevy_ecs::prelude::*;
 
@@ -8,7 +9,7 @@ use crate::components::{Cloth, Particles, RenderMesh, Triangles};
 use crate::resources::{HealthReport, IntegratorStats, Probes, SimClock};
 use crate::scene::load::SceneFile;
 use crate::scene::{Scene, SceneCounts, SceneError, spawn_scene};
-use crate::schedule::{FrameSchedule, RenderSchedule, add_schedules};
+use crate::schedule::{FrameSchedule, ProbeSchedule, RenderSchedule, add_schedules};
 
 /// A run that went bad: where and when.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -37,11 +38,21 @@ pub struct ClothSurface<'a> {
     pub triangles: &'a [[u32; 3]],
 }
 
+/// Where a frame's wall-clock time went.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FrameTiming {
+    /// The simulation: the frame's steps, health check and render data.
+    pub simulation: Duration,
+    /// The probes ([`ProbeSchedule`]), which measure the frame.
+    pub probes: Duration,
+}
+
 /// A simulation: the ECS world holding the scene's cloths and resources, with the
 /// schedules that step it.
 pub struct Simulation {
     world: World,
     counts: SceneCounts,
+    timing: FrameTiming,
 }
 
 impl Simulation {
@@ -51,7 +62,7 @@ impl Simulation {
         let counts = spawn_scene(&mut world, scene, base_dir)?;
         add_schedules(&mut world);
         world.run_schedule(RenderSchedule);
-        Ok(Self { world, counts })
+        Ok(Self { world, counts, timing: FrameTiming::default() })
     }
 
     /// Builds the world of a scene read from a file; errors point into the file.
@@ -66,7 +77,13 @@ impl Simulation {
         // other thread has to wake a worker and sleep until it is done, which cost more
         // than the loops themselves (block descent starts a few hundred per step).
         let world = &mut self.world;
-        rayon::scope(|_| world.run_schedule(FrameSchedule));
+        let start = Instant::now();
+        let probes = rayon::scope(|_| {
+            world.run_schedule(FrameSchedule);
+            let measuring = Instant::now();
+            world.run_schedule(ProbeSchedule);
+            measuring.elapsed()
+        });
         if let Some(problem) = self.world.resource::<HealthReport>().problem.clone() {
             let clock = self.clock();
             return Err(Divergence {
@@ -77,7 +94,13 @@ impl Simulation {
             });
         }
         self.world.run_schedule(RenderSchedule);
+        self.timing = FrameTiming { simulation: start.elapsed() - probes, probes };
         Ok(())
+    }
+
+    /// Where the last frame's time went.
+    pub fn frame_timing(&self) -> FrameTiming {
+        self.timing
     }
 
     /// What the scene built.

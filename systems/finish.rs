@@ -1,4 +1,4 @@
-//! End-of-frame work: the health check, the probes and the frame count.
+//! End-of-frame work: the health check and the frame count, and the probes after them.
 
 use bevy_ecs::prelude::*;
 use glam::Vec3;
@@ -49,7 +49,7 @@ pub fn check_cloth_health(
 /// the total force the pins carry, from the forces at the frame's final state) and
 /// `self_intersections` (pairs of non-adjacent triangles of a cloth that intersect, by an
 /// exact test independent of the contact code).
-/// Runs in [`FrameSystems::Finish`].
+/// Runs in [`ProbeSchedule`](crate::schedule::ProbeSchedule).
 pub fn measure_probes(
     environment: ForceEnvironment,
     mut probes: ResMut<Probes>,
@@ -78,7 +78,7 @@ pub fn measure_probes(
 }
 
 /// Measures the cloth probes the scene asked for (cantilever angle, drape coefficient,
-/// mean stress). Runs in [`FrameSystems::Finish`].
+/// mean stress). Runs in [`ProbeSchedule`](crate::schedule::ProbeSchedule).
 pub fn measure_cloth_probes(
     requests: Res<ProbeRequests>,
     mut probes: ResMut<Probes>,
@@ -96,7 +96,7 @@ pub fn measure_cloth_probes(
 /// (magnitude of the frame-averaged vector sum of contact forces on all cloths),
 /// `contact_pressure_pa` and `friction_stress_pa` (mean normal and friction force per
 /// contact area), `max_penetration_m` (deepest particle inside a body). Runs in
-/// [`FrameSystems::Finish`].
+/// [`ProbeSchedule`](crate::schedule::ProbeSchedule).
 pub fn measure_contact_probes(
     settings: Res<StepSettings>,
     colliders: Query<(), With<Collider>>,
@@ -131,7 +131,7 @@ pub fn measure_contact_probes(
 /// `impact_zone_rounds` (rounds of rigid impact zones the frame needed; 0 when impulses
 /// sufficed) and `untangle_crossings` (edge–triangle crossings found at the starts of the
 /// frame's steps, summed, and being untangled; 0 once the cloths are apart). Runs in
-/// [`FrameSystems::Finish`].
+/// [`ProbeSchedule`](crate::schedule::ProbeSchedule).
 pub fn measure_self_contact_probes(
     settings: Res<StepSettings>,
     contacts: Res<ClothContacts>,
@@ -155,16 +155,8 @@ pub fn count_frame(mut clock: ResMut<SimClock>) {
 
 /// Adds this module's systems.
 pub fn add_to(schedules: &mut SimSchedules) {
-    schedules.frame.add_systems(
-        (
-            check_cloth_health,
-            measure_probes,
-            measure_cloth_probes,
-            measure_contact_probes,
-            measure_self_contact_probes,
-            count_frame,
-        )
-            .chain()
-            .in_set(FrameSystems::Finish),
+    schedules.frame.add_systems((check_cloth_health, count_frame).chain().in_set(FrameSystems::Finish));
+    schedules.probe.add_systems(
+        (measure_probes, measure_cloth_probes, measure_contact_probes, measure_self_contact_probes).chain(),
     );
 }

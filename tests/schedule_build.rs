@@ -10,7 +10,7 @@ use selvedge::schedule::{SubstepSystems, build_schedules};
 fn every_schedule_initializes_without_ambiguities() {
     let mut world = World::new();
     let mut schedules = build_schedules();
-    for schedule in [&mut schedules.frame, &mut schedules.substep, &mut schedules.render] {
+    for schedule in [&mut schedules.frame, &mut schedules.substep, &mut schedules.probe, &mut schedules.render] {
         assert_eq!(schedule.get_build_settings().ambiguity_detection, LogLevel::Error);
         if let Err(error) = schedule.initialize(&mut world) {
             panic!("{:?} does not build: {}", schedule.label(), error.to_string(schedule.graph(), &world));
