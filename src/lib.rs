@@ -30,4 +30,4 @@ pub mod solver;
 #[path = "../systems/mod.rs"]
 pub mod systems;
 
-pub use simulation::{Divergence, Simulation};
+pub use simulation::{Divergence, FrameTiming, Simulation};

@@ -84,21 +84,26 @@ impl Simulation {
             world.run_schedule(ProbeSchedule);
             measuring.elapsed()
         });
-        if let Some(problem) = self.world.resource::<HealthReport>().problem.clone() {
-            let clock = self.clock();
-            return Err(Divergence {
-                frame: clock.frame.max(1),
-                time_s: clock.time_s,
-                cloth: problem.cloth,
-                problem: problem.problem,
-            });
+        let problem = self.world.resource::<HealthReport>().problem.clone();
+        if problem.is_none() {
+            self.world.run_schedule(RenderSchedule);
         }
-        self.world.run_schedule(RenderSchedule);
         self.timing = FrameTiming { simulation: start.elapsed() - probes, probes };
-        Ok(())
+        match problem {
+            Some(problem) => {
+                let clock = self.clock();
+                Err(Divergence {
+                    frame: clock.frame.max(1),
+                    time_s: clock.time_s,
+                    cloth: problem.cloth,
+                    problem: problem.problem,
+                })
+            }
+            None => Ok(()),
+        }
     }
 
-    /// Where the last frame's time went.
+    /// Where the last frame's time went, a diverged one's too.
     pub fn frame_timing(&self) -> FrameTiming {
         self.timing
     }
