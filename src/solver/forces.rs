@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use super::PARALLEL_MIN_LEN;
 use super::contact_springs::ContactSpring;
 use super::descent::Colouring;
-use super::elements::{BlockMatrix, BlockPattern, SpringElement, VelocityJacobian};
+use super::elements::{BlockMatrix, BlockPattern, NO_HINGE, SpringElement, VelocityJacobian};
 use super::implicit::LinearDynamics;
 use super::integrate::Dynamics;
 use super::multigrid::Hierarchy;
@@ -275,21 +275,36 @@ impl ForceModel<'_> {
 
     /// The total force on each of `particles` at state `(x, v)` and time `t` [N], as
     /// [`ForceModel::eval`] gives it, from their own elements alone: the pins' reaction
-    /// without evaluating the whole cloth. `scratch` takes the hinge angles.
-    pub fn force_on<'p>(
+    /// without evaluating the whole cloth. `scratch` takes the angles of the hinges whose
+    /// moments the particles' hinges need (those of their faces); the other hinges'
+    /// entries are left as they were, and not read.
+    pub fn force_on<'p, P>(
         &'p self,
-        particles: impl IntoIterator<Item = u32> + 'p,
+        particles: P,
         x: &'p [Vec3],
         v: &'p [Vec3],
         t: f32,
         scratch: &'p mut ForceScratch,
-    ) -> impl Iterator<Item = Vec3> + 'p {
-        let bending = self.hinges.view();
+    ) -> impl Iterator<Item = Vec3> + 'p
+    where
+        P: IntoIterator<Item = u32>,
+        P::IntoIter: Clone + 'p,
+    {
+        let particles = particles.into_iter();
+        let (bending, topology) = (self.hinges.view(), self.topology);
         scratch.hinge_delta.resize(self.hinges.vertices.len(), 0.0);
-        bending.angles(x, &mut scratch.hinge_delta);
+        for p in particles.clone() {
+            for &corner in topology.particle_hinges.row(p as usize) {
+                for &side in topology.hinge_faces.row(corner as usize / 4) {
+                    for &h in self.hinges.faces[side as usize / 3].hinges.iter().filter(|&&h| h != NO_HINGE) {
+                        scratch.hinge_delta[h as usize] = bending.angle(h as usize, x);
+                    }
+                }
+            }
+        }
         let local = LocalForces { model: self, x, v, wind: self.air.wind_at(t), delta: &scratch.hinge_delta };
         let rate = self.damping_rate();
-        particles.into_iter().map(move |p| {
+        particles.map(move |p| {
             let i = p as usize;
             let user = self.user_forces.iter().filter(|(q, _)| *q == p).map(|(_, f)| *f);
             user.fold(self.particle_force(i, v[i], rate, &local), |total, f| total + f)
@@ -623,7 +638,10 @@ mod tests {
         let mut whole = vec![Vec3::ZERO; x.len()];
         model.eval(x, v, 0.4, &mut ForceScratch::default(), &mut whole);
         let chosen = [0, 5, 6, 9, 15];
+        // The scratch holds another state's hinge angles, as between steps.
         let mut scratch = ForceScratch::default();
+        let elsewhere: Vec<Vec3> = x.iter().map(|p| 1.1 * *p + Vec3::Y * p.x * p.z).collect();
+        model.eval(&elsewhere, v, 0.4, &mut scratch, &mut vec![Vec3::ZERO; x.len()]);
         let local: Vec<Vec3> = model.force_on(chosen.iter().copied(), x, v, 0.4, &mut scratch).collect();
         let expected: Vec<Vec3> = chosen.iter().map(|&p| whole[p as usize]).collect();
         assert_eq!(local, expected);

@@ -131,8 +131,13 @@ impl BendingSurface<'_> {
     /// Each hinge's angle away from rest [rad], written to `delta`, in parallel.
     pub fn angles(&self, x: &[Vec3], delta: &mut [f32]) {
         delta.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(h, d)| {
-            *d = hinge_angle(self.hinges[h].map(|p| x[p as usize])) - self.rest_angle[h];
+            *d = self.angle(h, x);
         });
+    }
+
+    /// Hinge `h`'s angle away from rest at positions `x` [rad].
+    pub fn angle(&self, h: usize, x: &[Vec3]) -> f32 {
+        hinge_angle(self.hinges[h].map(|p| x[p as usize])) - self.rest_angle[h]
     }
 
     /// Energy of face `f` [J].
