@@ -277,9 +277,7 @@ pub fn implicit_step(
     let first = if friction { guide } else { tolerance };
     report.iterations += solve(dynamics, settings, Start::Prescribed, first, x, h * theta, ws);
     let mut accurate = !friction;
-    ws.constraint_impulses.clear();
-    ws.constraint_impulses.resize(constraints.len(), Vec3::ZERO);
-    add_constraint_impulses(dynamics.pattern(), springs_of(settings, dynamics), constraints, ws);
+    set_constraint_impulses(dynamics, settings, constraints, ws);
     // Bodies moved by the constraints' impulses: solve again, from the last solution, with
     // the velocities their balance asks for, until they settle.
     if let Some(bodies) = bodies {
@@ -297,8 +295,7 @@ pub fn implicit_step(
             }
             report.iterations += solve(dynamics, settings, Start::Given, tolerance, x, h * theta, ws);
             accurate = true;
-            ws.constraint_impulses.fill(Vec3::ZERO);
-            add_constraint_impulses(dynamics.pattern(), springs_of(settings, dynamics), constraints, ws);
+            set_constraint_impulses(dynamics, settings, constraints, ws);
         }
     }
     if friction {
@@ -314,8 +311,7 @@ pub fn implicit_step(
         }
         if !accurate {
             report.iterations += solve(dynamics, settings, Start::Given, tolerance, x, h * theta, ws);
-            ws.constraint_impulses.fill(Vec3::ZERO);
-            add_constraint_impulses(dynamics.pattern(), springs_of(settings, dynamics), constraints, ws);
+            set_constraint_impulses(dynamics, settings, constraints, ws);
         }
     }
     ws.dv.copy_from_slice(&ws.delta);
@@ -405,8 +401,7 @@ fn lag_friction(
     contact_springs::lag(dynamics.contact_springs_mut(), &ws.x, &ws.v);
     add_springs(1.0, dynamics.contact_springs(), dynamics.pattern(), settings, h, x, v, ws);
     let iterations = solve(dynamics, settings, Start::Given, tolerance, x, h * theta, ws);
-    ws.constraint_impulses.fill(Vec3::ZERO);
-    add_constraint_impulses(dynamics.pattern(), springs_of(settings, dynamics), constraints, ws);
+    set_constraint_impulses(dynamics, settings, constraints, ws);
     Some(iterations)
 }
 
@@ -491,6 +486,19 @@ fn multiply_system(
 
 fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
     a.iter().zip(b).map(|(a, b)| f64::from(a.dot(*b))).sum()
+}
+
+/// Sets `ws.constraint_impulses` to what each constraint had to supply in the last solve
+/// ([`add_constraint_impulses`]).
+fn set_constraint_impulses(
+    dynamics: &impl LinearDynamics,
+    settings: &ImplicitSettings,
+    constraints: &[VelocityConstraint],
+    ws: &mut ImplicitWorkspace,
+) {
+    ws.constraint_impulses.clear();
+    ws.constraint_impulses.resize(constraints.len(), Vec3::ZERO);
+    add_constraint_impulses(dynamics.pattern(), springs_of(settings, dynamics), constraints, ws);
 }
 
 /// Adds what each constraint had to supply in the last solve, `A δ − rhs` at its
