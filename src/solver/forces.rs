@@ -151,8 +151,10 @@ const ELEMENT_CHUNK: usize = 256;
 /// Adds the `N × N` local blocks `local(e)` of every element `e` to `matrix` (over
 /// `pattern`) at the blocks of `stencil(e)` found by `positions[e]`: each chunk's blocks
 /// are computed in parallel, then added in element order while the next chunk is
-/// computed ([`pipelined`]), so the sums are the same on any number of threads and the
-/// additions overlap the element work.
+/// computed ([`pipelined`]), by two tasks that share the rows
+/// ([`BlockMatrix::add_by_halves`]), so the sums are the same on any number of threads
+/// and the additions overlap the element work. Added by one task, they held the bending
+/// faces' assembly to 1.27 times its one-thread speed on two threads.
 fn add_elements<const N: usize>(
     matrix: &mut BlockMatrix,
     pattern: &BlockPattern,
@@ -176,13 +178,23 @@ fn add_elements<const N: usize>(
         );
     };
     pipelined(elements.div_ceil(ELEMENT_CHUNK), buffer, half, compute, |chunk, blocks| {
-        let first = chunk * ELEMENT_CHUNK;
-        for (e, element_blocks) in (first..elements.min(first + ELEMENT_CHUNK)).zip(blocks.chunks(size)) {
-            let slots = pattern.slots_at(stencil(e), &positions[e]);
-            for (slot, block) in slots.iter().flatten().zip(element_blocks) {
-                matrix.blocks[*slot as usize] += *block;
+        let range = chunk * ELEMENT_CHUNK..elements.min((chunk + 1) * ELEMENT_CHUNK);
+        // Split at the middle element's first particle: elements near in order are near in
+        // the cloth, so the halves share the additions.
+        let split = stencil((range.start + range.end) / 2)[0] as usize;
+        matrix.add_by_halves(pattern, split, |rows, target, first| {
+            for (e, element_blocks) in range.clone().zip(blocks.chunks(size)) {
+                for (a, (&particle, row_blocks)) in stencil(e).iter().zip(element_blocks.chunks(N)).enumerate() {
+                    let row = particle as usize;
+                    if rows.contains(&row) {
+                        let start = pattern.offsets[row] as usize - first;
+                        for (&position, block) in positions[e][a].iter().zip(row_blocks) {
+                            target[start + usize::from(position)] += *block;
+                        }
+                    }
+                }
             }
-        }
+        });
     });
 }
 

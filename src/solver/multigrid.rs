@@ -891,18 +891,27 @@ impl Level {
         pipelined(chunks, buffer, half, compute, |chunk, blocks| {
             let rows = chunk_rows(chunk);
             let first = ap.slots_of(rows.clone()).start;
-            for r in rows {
-                let slots = ap.slots(r);
-                let (products, product_columns) = (&blocks[slots.start - first..slots.end - first], ap.row(r));
-                for s in p.slots(r) {
-                    let (row, transposed) = (p.columns[s] as usize, prolongation[s].transpose());
-                    let (columns, coarse_blocks) = (coarse.row(row), &mut out.blocks[coarse.slots(row)]);
-                    let mut at = 0;
-                    for (&column, product) in product_columns.iter().zip(products) {
-                        add_at(columns, coarse_blocks, &mut at, column, transposed * *product);
+            // Split at the middle fine row's first coarse node: near fine rows restrict to
+            // near coarse rows, so the halves share the additions.
+            let middle = (rows.start + rows.end) / 2;
+            let split = p.row(middle).first().map_or(0, |&node| node as usize);
+            out.add_by_halves(coarse, split, |coarse_rows, coarse_blocks, coarse_first| {
+                for r in rows.clone() {
+                    let slots = ap.slots(r);
+                    let (products, product_columns) = (&blocks[slots.start - first..slots.end - first], ap.row(r));
+                    for s in p.slots(r).filter(|&s| coarse_rows.contains(&(p.columns[s] as usize))) {
+                        let (row, transposed) = (p.columns[s] as usize, prolongation[s].transpose());
+                        let row_slots = coarse.slots(row);
+                        let columns = coarse.row(row);
+                        let row_blocks =
+                            &mut coarse_blocks[row_slots.start - coarse_first..row_slots.end - coarse_first];
+                        let mut at = 0;
+                        for (&column, product) in product_columns.iter().zip(products) {
+                            add_at(columns, row_blocks, &mut at, column, transposed * *product);
+                        }
                     }
                 }
-            }
+            });
         });
     }
 

@@ -133,6 +133,23 @@ impl BlockMatrix {
         }
     }
 
+    /// Adds to the rows below `split` and to the rest in two parallel tasks:
+    /// `add(rows, blocks, first)` gets the blocks of `rows` (over `pattern`), the first of
+    /// them at slot `first`, and must add only into those. Terms that each task adds in a
+    /// fixed order keep that order, and so their sums, on any number of threads; the
+    /// serial additions of an assembly become two.
+    pub fn add_by_halves(
+        &mut self,
+        pattern: &BlockPattern,
+        split: usize,
+        add: impl Fn(std::ops::Range<usize>, &mut [Mat3], usize) + Sync,
+    ) {
+        let split = split.min(pattern.rows());
+        let first = pattern.offsets[split] as usize;
+        let (low, high) = self.blocks.split_at_mut(first);
+        rayon::join(|| add(0..split, low, 0), || add(split..pattern.rows(), high, first));
+    }
+
     /// `out = self · x`.
     pub fn multiply(&self, pattern: &BlockPattern, x: &[Vec3], out: &mut [Vec3]) {
         out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, out)| {
@@ -253,6 +270,27 @@ mod tests {
         let mut out = vec![Vec3::ZERO; 3];
         m.multiply(&pattern, &[Vec3::X, Vec3::Y, Vec3::Z], &mut out);
         assert_eq!(out, vec![Vec3::X, 2.0 * Vec3::Y + Vec3::Z, 3.0 * Vec3::Z + Vec3::Y]);
+    }
+
+    /// Either half sees its own rows' blocks at their slots, wherever the split falls.
+    #[test]
+    fn halves_add_into_their_own_rows_only() {
+        let pattern = BlockPattern::from_stencils(3, [&[0u32, 1][..], &[1, 2][..]]);
+        for split in 0..5 {
+            let mut m = BlockMatrix::default();
+            m.reset(&pattern);
+            m.add_by_halves(&pattern, split, |rows, blocks, first| {
+                for row in rows {
+                    for slot in pattern.slots(row) {
+                        blocks[slot - first] += Mat3::from_diagonal(Vec3::splat((10 * row + slot) as f32));
+                    }
+                }
+            });
+            for slot in 0..pattern.columns.len() {
+                let expected = (10 * pattern.row_of(slot) + slot) as f32;
+                assert_eq!(m.blocks[slot], Mat3::from_diagonal(Vec3::splat(expected)), "split {split}, slot {slot}");
+            }
+        }
     }
 
     /// The diagonal-only velocity Jacobian multiplies, reads and combines as the full one
