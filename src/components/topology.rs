@@ -90,9 +90,8 @@ pub struct ClothTopology {
     /// Where each spring's local blocks go in the pattern, as positions within their rows
     /// ([`BlockPattern::stencil_positions`]).
     pub spring_positions: Vec<[[u16; 2]; 2]>,
-    /// Where each hinge's local blocks go.
-    pub hinge_positions: Vec<[[u16; 4]; 4]>,
-    /// Where each bending face's local blocks go.
+    /// Where each bending face's local blocks go (and, through its `corners`, each of its
+    /// hinges': the exact Jacobian's hinge blocks are among a face's).
     pub face_positions: Vec<[[u16; 6]; 6]>,
     /// Where each membrane triangle's local blocks go.
     pub membrane_positions: Vec<[[u16; 3]; 3]>,
@@ -142,7 +141,6 @@ impl ClothTopology {
             ),
             particle_membranes: Csr::from_corners(count, &membranes.indices),
             spring_positions: springs.pairs.iter().map(|&p| pattern.stencil_positions(p)).collect(),
-            hinge_positions: hinges.vertices.iter().map(|&h| pattern.stencil_positions(h)).collect(),
             face_positions: hinges.faces.iter().map(|f| pattern.stencil_positions(f.vertices)).collect(),
             membrane_positions: membranes.indices.iter().map(|&t| pattern.stencil_positions(t)).collect(),
             colouring: Colouring::greedy(&pattern),

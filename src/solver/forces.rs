@@ -148,8 +148,8 @@ impl ElementForces for LocalForces<'_> {
 /// 1 024 a chunk, 2.7 MB, 650 bytes a particle of the 64² hang scene).
 const ELEMENT_CHUNK: usize = 256;
 
-/// Adds the `N × N` local blocks `local(e)` of every element `e` to `matrix` (over
-/// `pattern`) at the blocks of `stencil(e)` found by `positions[e]`: each chunk's blocks
+/// Adds the `N × N` local blocks `local(e)` of each of the `elements` to `matrix` (over
+/// `pattern`) at the blocks of `stencil(e)` found by `positions(e)`: each chunk's blocks
 /// are computed in parallel, then added in element order while the next chunk is
 /// computed ([`pipelined`]), by two tasks that share the rows
 /// ([`BlockMatrix::add_by_halves`]), so the sums are the same on any number of threads
@@ -158,12 +158,12 @@ const ELEMENT_CHUNK: usize = 256;
 fn add_elements<const N: usize>(
     matrix: &mut BlockMatrix,
     pattern: &BlockPattern,
-    positions: &[[[u16; N]; N]],
+    elements: usize,
+    positions: impl Fn(usize) -> [[u16; N]; N] + Sync,
     stencil: impl Fn(usize) -> [u32; N] + Sync,
     buffer: &mut Vec<Mat3>,
     local: impl Fn(usize) -> [[Mat3; N]; N] + Sync,
 ) {
-    let elements = positions.len();
     let size = N * N;
     let half = ELEMENT_CHUNK.min(elements) * size;
     let compute = |chunk: usize, blocks: &mut [Mat3]| {
@@ -184,11 +184,12 @@ fn add_elements<const N: usize>(
         let split = stencil((range.start + range.end) / 2)[0] as usize;
         matrix.add_by_halves(pattern, split, |rows, target, first| {
             for (e, element_blocks) in range.clone().zip(blocks.chunks(size)) {
+                let positions = positions(e);
                 for (a, (&particle, row_blocks)) in stencil(e).iter().zip(element_blocks.chunks(N)).enumerate() {
                     let row = particle as usize;
                     if rows.contains(&row) {
                         let start = pattern.offsets[row] as usize - first;
-                        for (&position, block) in positions[e][a].iter().zip(row_blocks) {
+                        for (&position, block) in positions[a].iter().zip(row_blocks) {
                             target[start + usize::from(position)] += *block;
                         }
                     }
@@ -393,19 +394,33 @@ impl ForceModel<'_> {
         }
         let bending = self.hinges.view();
         let ForceScratch { hinge_delta, hinge_gradient, hinge_moment, local_blocks, .. } = scratch;
-        let faces = |f: usize| self.hinges.faces[f].vertices;
-        add_elements(dfdx, pattern, &topology.face_positions, faces, local_blocks, |f| {
-            bending.face_jacobian(f, hinge_gradient, hinge_delta)
-        });
+        let (faces, face_positions) = (&self.hinges.faces, &topology.face_positions);
+        let face_stencil = |f: usize| faces[f].vertices;
+        add_elements(
+            dfdx,
+            pattern,
+            faces.len(),
+            |f| face_positions[f],
+            face_stencil,
+            local_blocks,
+            |f| bending.face_jacobian(f, hinge_gradient, hinge_delta),
+        );
         if !definite {
+            // A hinge's blocks are among those of a face beside it (`corners` says where).
+            let hinge_positions = |h: usize| {
+                let side = topology.hinge_faces.row(h)[0] as usize;
+                let (positions, corners) = (&face_positions[side / 3], faces[side / 3].corners[side % 3]);
+                corners.map(|a| corners.map(|b| positions[usize::from(a)][usize::from(b)]))
+            };
             let hinges = |h: usize| self.hinges.vertices[h];
-            add_elements(dfdx, pattern, &topology.hinge_positions, hinges, local_blocks, |h| {
+            add_elements(dfdx, pattern, self.hinges.vertices.len(), hinge_positions, hinges, local_blocks, |h| {
                 bending.hinge_curvature_jacobian(h, x, hinge_moment[h])
             });
         }
         let material = &self.membranes.material;
         let triangles = |m: usize| self.membranes.indices[m];
-        add_elements(dfdx, pattern, &topology.membrane_positions, triangles, local_blocks, |m| {
+        let membrane_positions = |m: usize| topology.membrane_positions[m];
+        add_elements(dfdx, pattern, self.membranes.indices.len(), membrane_positions, triangles, local_blocks, |m| {
             let corners = triangles(m).map(|p| x[p as usize]);
             self.membranes.elements[m].position_jacobian(material, corners, definite)
         });
