@@ -45,8 +45,6 @@ pub struct MotionBounds {
     /// non-negative `f32`, whose order is the numbers' order: an atomic minimum over them
     /// is exact and does not depend on the order the pairs are met in.
     nearest: Vec<AtomicU32>,
-    /// How many times the bounds were computed, for statistics.
-    computed: u64,
 }
 
 impl Clone for MotionBounds {
@@ -63,7 +61,6 @@ impl MotionBounds {
     /// smooth sheet the nearest primitives that do not touch a vertex are about 0.7 of an
     /// edge from it, so looking farther than an edge would loosen no bound.
     pub fn compute(&mut self, surface: Surface<'_>, x: &[Vec3], wanted: f32, bounds: &mut [f32]) {
-        self.computed += 1;
         let Surface { triangles, edges } = surface;
         let edge = if edges.is_empty() {
             0.0
@@ -133,11 +130,6 @@ impl MotionBounds {
             .zip(nearest.par_iter())
             .with_min_len(PARALLEL_MIN_LEN)
             .for_each(|(bound, d)| *bound = GAMMA * f32::from_bits(d.load(Ordering::Relaxed)));
-    }
-
-    /// How many times [`MotionBounds::compute`] ran.
-    pub fn computed(&self) -> u64 {
-        self.computed
     }
 }
 
@@ -243,7 +235,6 @@ pub(crate) mod tests {
         let mut again = vec![0.0; x0.len()];
         motion.compute(surface, &x0, 1.0, &mut again);
         assert_eq!(again, bounds);
-        assert_eq!(motion.computed(), 2);
     }
 
     #[test]

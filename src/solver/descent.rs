@@ -160,8 +160,13 @@ impl BoundedMotion<'_> {
             .zip(delta.par_iter())
             .enumerate()
             .with_min_len(super::PARALLEL_MIN_LEN)
-            .for_each(|(i, (anchor, d))| *anchor = base[i] + scale * *d);
+            .for_each(|(i, (anchor, d))| *anchor = position(base, scale, i, *d));
     }
+}
+
+/// Where particle `i` is at `delta`: `base[i] + scale · delta`.
+fn position(base: &[Vec3], scale: f32, i: usize, delta: Vec3) -> Vec3 {
+    base[i] + scale * delta
 }
 
 /// The positions of a [`BoundedMotion`], shared by the threads of a sweep.
@@ -175,7 +180,7 @@ struct Frame<'a> {
 impl Frame<'_> {
     /// Particle `i`'s distance vector from its anchor at `delta`.
     fn offset(&self, i: usize, delta: Vec3) -> Vec3 {
-        self.base[i] + self.scale * delta - self.anchor[i]
+        position(self.base, self.scale, i, delta) - self.anchor[i]
     }
 
     /// The fraction of the change `change` to particle `i`'s `delta` that keeps it within
@@ -229,7 +234,7 @@ fn advance_anchor(motion: &mut BoundedMotion<'_>, delta: &mut [Vec3], filter: &[
         }
         let (base, scale, delta) = (motion.base, motion.scale, &*delta);
         motion.anchor.par_iter_mut().enumerate().with_min_len(super::PARALLEL_MIN_LEN).for_each(|(i, anchor)| {
-            let offset = base[i] + scale * delta[i] - *anchor;
+            let offset = position(base, scale, i, delta[i]) - *anchor;
             *anchor += offset * (bounds[i] / offset.length()).min(1.0);
         });
     }
