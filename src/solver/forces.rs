@@ -184,13 +184,12 @@ fn add_elements<const N: usize>(
         let split = stencil((range.start + range.end) / 2)[0] as usize;
         matrix.add_by_halves(pattern, split, |rows, target, first| {
             for (e, element_blocks) in range.clone().zip(blocks.chunks(size)) {
-                let positions = positions(e);
-                for (a, (&particle, row_blocks)) in stencil(e).iter().zip(element_blocks.chunks(N)).enumerate() {
-                    let row = particle as usize;
-                    if rows.contains(&row) {
-                        let start = pattern.offsets[row] as usize - first;
-                        for (&position, block) in positions[a].iter().zip(row_blocks) {
-                            target[start + usize::from(position)] += *block;
+                let particles = stencil(e);
+                let slots = pattern.slots_at(particles, &positions(e));
+                for ((particle, row_slots), row_blocks) in particles.iter().zip(&slots).zip(element_blocks.chunks(N)) {
+                    if rows.contains(&(*particle as usize)) {
+                        for (&slot, block) in row_slots.iter().zip(row_blocks) {
+                            target[slot as usize - first] += *block;
                         }
                     }
                 }
