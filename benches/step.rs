@@ -16,7 +16,7 @@ use selvedge::solver::descent::{DescentSettings, DescentWorkspace, descend};
 use selvedge::solver::elements::{BlockMatrix, VelocityJacobian};
 use selvedge::solver::forces::{Air, ClothDynamics, ForceModel, ForceScratch};
 use selvedge::solver::integrate::{Integrator, IntegratorWorkspace, MethodSettings, step};
-use selvedge::solver::probes::max_strain;
+use selvedge::solver::probes::most_stretched_edge;
 
 const SIZES: [u32; 2] = [64, 256];
 
@@ -105,7 +105,9 @@ fn kernels(c: &mut Criterion) {
             on_pool(b, || model.potential_energy(black_box(&x), &mut scratch));
         });
         group.bench_function(BenchmarkId::new("probes/max_strain", &size), |b| {
-            on_pool(b, || max_strain(black_box(&x), &cloth.particles.rest_position, &cloth.springs, &cloth.membranes));
+            on_pool(b, || {
+                most_stretched_edge(black_box(&x), &cloth.particles.rest_position, &cloth.springs, &cloth.membranes)
+            });
         });
         let mut counter = IntersectionCounter::default();
         group.bench_function(BenchmarkId::new("probes/self_intersections", &size), |b| {

@@ -81,6 +81,10 @@ pub struct HealthProblem {
 pub struct HealthReport {
     /// The first problem found, if any.
     pub problem: Option<HealthProblem>,
+    /// The largest edge strain of any cloth at the last check (0 without edges): the
+    /// check measures it to compare with the divergence limit, and the `max_strain` probe
+    /// reports it.
+    pub max_strain: f32,
 }
 
 /// Named measurements of the last frame, in name order. Any system may add a probe; the

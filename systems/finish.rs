@@ -16,10 +16,11 @@ use crate::resources::{
 use crate::schedule::{FrameSystems, SimSchedules};
 use crate::solver::health::check_health;
 use crate::solver::pins::pin_reaction;
-use crate::solver::probes::{kinetic_energy, max_strain};
+use crate::solver::probes::kinetic_energy;
 
 /// Records the first cloth whose state is non-finite or stretched past the divergence
-/// limit (MuJoCo's `mj_checkPos`, as a named stage). Runs in [`FrameSystems::Finish`].
+/// limit (MuJoCo's `mj_checkPos`, as a named stage), and the largest edge strain over all
+/// cloths. Runs in [`FrameSystems::Finish`].
 pub fn check_cloth_health(
     limit: Res<DivergenceLimit>,
     mut health: ResMut<HealthReport>,
@@ -28,35 +29,34 @@ pub fn check_cloth_health(
     if health.problem.is_some() {
         return;
     }
+    health.max_strain = 0.0;
     for (cloth, particles, springs, membranes) in &cloths {
-        if let Err(problem) = check_health(
-            &particles.position,
-            &particles.velocity,
-            &particles.rest_position,
-            springs,
-            membranes,
-            limit.max_strain,
-        ) {
-            health.problem = Some(HealthProblem { cloth: cloth.name.clone(), problem: problem.to_string() });
-            return;
+        let (x, v, rest) = (&particles.position, &particles.velocity, &particles.rest_position);
+        match check_health(x, v, rest, springs, membranes, limit.max_strain) {
+            Ok(strain) => health.max_strain = health.max_strain.max(strain),
+            Err(problem) => {
+                health.problem = Some(HealthProblem { cloth: cloth.name.clone(), problem: problem.to_string() });
+                return;
+            }
         }
     }
 }
 
 /// Measures the frame's probes over all cloths: `kinetic_energy_j`, `potential_energy_j`
 /// (gravity about y = 0 plus elastic energy), `max_strain` (largest edge strain, springs
-/// and membrane triangle sides) and `pin_force_n` (magnitude of
+/// and membrane triangle sides, as the frame's health check measured it) and `pin_force_n` (magnitude of
 /// the total force the pins carry, from the forces at the frame's final state) and
 /// `self_intersections` (pairs of non-adjacent triangles of a cloth that intersect, by an
 /// exact test independent of the contact code).
 /// Runs in [`ProbeSchedule`](crate::schedule::ProbeSchedule).
 pub fn measure_probes(
     environment: ForceEnvironment,
+    health: Res<HealthReport>,
     mut probes: ResMut<Probes>,
     mut cloths: Query<(&Particles, ForceElements, &Pins, &mut SolverWorkspace)>,
     mut counter: Local<IntersectionCounter>,
 ) {
-    let (mut kinetic, mut potential, mut strain, mut pin_force) = (0.0, 0.0, f32::NEG_INFINITY, Vec3::ZERO);
+    let (mut kinetic, mut potential, mut pin_force) = (0.0, 0.0, Vec3::ZERO);
     let mut intersections = 0;
     for (particles, elements, pins, mut workspace) in &mut cloths {
         let model = environment.model(&particles.inv_mass, elements);
@@ -64,7 +64,6 @@ pub fn measure_probes(
         kinetic += kinetic_energy(&particles.velocity, &particles.inv_mass);
         let forces = &mut workspace.forces;
         potential += model.potential_energy(&particles.position, forces);
-        strain = strain.max(max_strain(&particles.position, &particles.rest_position, model.springs, model.membranes));
         if !pins.is_empty() {
             let (x, v) = (&particles.position, &particles.velocity);
             pin_force += pin_reaction(model.force_on(pins.particles.iter().copied(), x, v, environment.time(), forces));
@@ -72,7 +71,7 @@ pub fn measure_probes(
     }
     probes.set("kinetic_energy_j", kinetic);
     probes.set("potential_energy_j", potential);
-    probes.set("max_strain", f64::from(strain.max(f32::MIN)));
+    probes.set("max_strain", f64::from(health.max_strain));
     probes.set("pin_force_n", f64::from(pin_force.length()));
     probes.set("self_intersections", intersections as f64);
 }

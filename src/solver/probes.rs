@@ -44,11 +44,6 @@ pub fn most_stretched_edge(
     reduce::reduce(0..edges, &|range: Range<usize>| range.map(edge).fold(None, |w, e| worse(w, Some(e))), &worse)
 }
 
-/// Largest edge strain [-] (see [`most_stretched_edge`]), or 0 without edges.
-pub fn max_strain(x: &[Vec3], rest: &[Vec3], springs: &Springs, membranes: &MembraneTriangles) -> f32 {
-    most_stretched_edge(x, rest, springs, membranes).map_or(0.0, |(_, strain)| strain)
-}
-
 /// A measurement of one cloth that a scene asks for by configuration.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum ClothProbe {
