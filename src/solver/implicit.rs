@@ -83,8 +83,8 @@ pub enum LinearSolver {
 }
 
 /// A system whose forces can be linearised: what an implicit solver needs beyond
-/// [`Dynamics`].
-pub trait LinearDynamics: Dynamics {
+/// [`Dynamics`]. Shared by the parallel loops that build the step's system.
+pub trait LinearDynamics: Dynamics + Sync {
     /// The block pattern of the derivatives.
     fn pattern(&self) -> &BlockPattern;
     /// Mass of particle `i` [kg].
@@ -451,8 +451,7 @@ fn build_system(settings: &ImplicitSettings, h: f32, dynamics: &impl LinearDynam
     let pattern = dynamics.pattern();
     let k_weight = h * beta + h * h * theta * theta;
     ws.system = std::mem::take(&mut ws.dfdx);
-    ws.dfdv.combine_into(-h, k_weight, pattern, &mut ws.system);
-    ws.system.add_diagonal(pattern, |i| (1.0 + h * alpha) * dynamics.mass(i));
+    ws.dfdv.combine_into(-h, k_weight, pattern, &mut ws.system, |i| (1.0 + h * alpha) * dynamics.mass(i));
     ws.spring_weights = Weights { stiffness: k_weight, drag: h };
     contact_springs::add_diagonal(springs_of(settings, dynamics), ws.spring_weights, pattern, &mut ws.system);
 }

@@ -605,32 +605,7 @@ fn fill_rows(
 ) {
     blocks.clear();
     blocks.resize(pattern.columns.len(), Mat3::ZERO);
-    fill_row_range(pattern, size, 0..pattern.rows(), blocks, &group);
-}
-
-/// [`fill_rows`] over `rows` (whole groups of `size`), whose blocks are `blocks`: halves
-/// in parallel down to [`PARALLEL_MIN_LEN`] blocks.
-fn fill_row_range(
-    pattern: &BlockPattern,
-    size: usize,
-    rows: std::ops::Range<usize>,
-    blocks: &mut [Mat3],
-    group: &(impl Fn(usize, &[u32], &mut [Mat3]) + Sync),
-) {
-    let first = pattern.offsets[rows.start] as usize;
-    if blocks.len() <= PARALLEL_MIN_LEN || rows.len() <= size {
-        for i in rows.step_by(size) {
-            let slots = pattern.slots_of(i..i + size);
-            group(i, pattern.row(i), &mut blocks[slots.start - first..slots.end - first]);
-        }
-        return;
-    }
-    let middle = rows.start + rows.len() / (2 * size) * size;
-    let (left, right) = blocks.split_at_mut(pattern.offsets[middle] as usize - first);
-    rayon::join(
-        || fill_row_range(pattern, size, rows.start..middle, left, group),
-        || fill_row_range(pattern, size, middle..rows.end, right, group),
-    );
+    pattern.fill_row_range(size, 0..pattern.rows(), blocks, &group);
 }
 
 /// Sets `out` to `system` (over `pattern`) over `fine`, a pattern of fewer blocks: the
@@ -876,7 +851,7 @@ impl Level {
             let rows = chunk_rows(chunk);
             let blocks = &mut blocks[..ap.slots_of(rows.clone()).len()];
             blocks.fill(Mat3::ZERO);
-            fill_row_range(ap, 1, rows, blocks, &|i, columns, blocks| {
+            ap.fill_row_range(1, rows, blocks, &|i, columns, blocks| {
                 for k in a.pattern.slots(i) {
                     let (block, node) = (a.matrix.blocks[k], a.pattern.columns[k] as usize);
                     let mut at = 0;
