@@ -38,9 +38,11 @@ fn run_writes_frames_summary_and_probes() {
     assert_eq!(summary["particles"], 256);
     assert_eq!(summary["status"], "completed");
     assert!((summary["sim_time_s"].as_f64().expect("number") - 0.05).abs() < 1e-6);
-    for field in ["wall_time_s", "ms_per_frame", "springs", "triangles"] {
+    for field in ["wall_time_s", "ms_per_frame", "probe_ms_per_frame", "springs", "triangles"] {
         assert!(summary[field].is_number(), "summary lacks {field}");
     }
+    let (frame_ms, probe_ms) = (summary["ms_per_frame"].as_f64(), summary["probe_ms_per_frame"].as_f64());
+    assert!(probe_ms > Some(0.0) && probe_ms < frame_ms, "probes took {probe_ms:?} of {frame_ms:?} ms a frame");
     for probe in ["kinetic_energy_j", "potential_energy_j", "max_strain", "pin_force_n", "self_intersections"] {
         assert!(summary["probes"][probe].is_number(), "summary lacks probe {probe}");
     }

@@ -38,11 +38,12 @@ pub(super) fn run(path: &Path, out: Option<PathBuf>, frames: Option<u32>, quiet:
     let progress = Progress::new(frame_count, quiet);
     let mut table = ProbeTable::default();
     let mut divergence = None;
-    let mut wall = 0.0;
+    let (mut wall, mut probing) = (0.0, 0.0);
     for frame in 1..=frame_count {
         let started = Instant::now();
         let stepped = simulation.step_frame();
         wall += started.elapsed().as_secs_f64();
+        probing += simulation.frame_timing().probes.as_secs_f64();
         if let Err(diverged) = stepped {
             divergence = Some(diverged);
             break;
@@ -71,6 +72,7 @@ pub(super) fn run(path: &Path, out: Option<PathBuf>, frames: Option<u32>, quiet:
         sim_time_s: clock.time_s,
         wall_time_s: wall,
         ms_per_frame: if computed > 0 { 1e3 * wall / computed as f64 } else { 0.0 },
+        probe_ms_per_frame: if computed > 0 { 1e3 * probing / computed as f64 } else { 0.0 },
         particles: counts.particles,
         springs: counts.springs,
         triangles: counts.triangles,
@@ -114,12 +116,13 @@ fn prepare_frames_dir(dir: &Path) -> std::io::Result<()> {
 #[expect(clippy::print_stdout, reason = "the summary is the command's output")]
 fn print_summary(summary: &Summary, dir: &Path) {
     println!(
-        "{}: {} frames ({:.3} s simulated) in {:.2} s, {:.2} ms/frame, {} with {} steps/frame",
+        "{}: {} frames ({:.3} s simulated) in {:.2} s, {:.2} ms/frame ({:.2} of it probes), {} with {} steps/frame",
         summary.scene,
         summary.frames,
         summary.sim_time_s,
         summary.wall_time_s,
         summary.ms_per_frame,
+        summary.probe_ms_per_frame,
         summary.integrator,
         summary.substeps
     );
