@@ -14,7 +14,7 @@ use crate::resources::{
     ClothContacts, DivergenceLimit, HealthProblem, HealthReport, ProbeRequests, Probes, SimClock, StepSettings,
 };
 use crate::schedule::{FrameSystems, SimSchedules};
-use crate::solver::health::check_health;
+use crate::solver::health::{Unhealthy, check_health};
 use crate::solver::pins::pin_reaction;
 use crate::solver::probes::kinetic_energy;
 
@@ -35,6 +35,9 @@ pub fn check_cloth_health(
         match check_health(x, v, rest, springs, membranes, limit.max_strain) {
             Ok(strain) => health.max_strain = health.max_strain.max(strain),
             Err(problem) => {
+                if let Unhealthy::Overstretched { strain, .. } = problem {
+                    health.max_strain = health.max_strain.max(strain);
+                }
                 health.problem = Some(HealthProblem { cloth: cloth.name.clone(), problem: problem.to_string() });
                 return;
             }

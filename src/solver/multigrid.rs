@@ -600,12 +600,11 @@ impl Operator<'_> {
 fn fill_rows(
     pattern: &BlockPattern,
     size: usize,
-    blocks: &mut Vec<Mat3>,
+    matrix: &mut BlockMatrix,
     group: impl Fn(usize, &[u32], &mut [Mat3]) + Sync,
 ) {
-    blocks.clear();
-    blocks.resize(pattern.columns.len(), Mat3::ZERO);
-    pattern.fill_row_range(size, 0..pattern.rows(), blocks, &group);
+    matrix.reset(pattern);
+    pattern.fill_row_range(size, 0..pattern.rows(), &mut matrix.blocks, &group);
 }
 
 /// Sets `out` to `system` (over `pattern`) over `fine`, a pattern of fewer blocks: the
@@ -617,7 +616,7 @@ fn fill_rows(
 /// whole system, 30 frames); their Frobenius norms on the diagonal instead doubled them
 /// at 256², where the bending outweighs the mass a thousandfold out of the sheet's plane.
 fn lump(pattern: &BlockPattern, system: &BlockMatrix, fine: &BlockPattern, out: &mut BlockMatrix) {
-    fill_rows(fine, 1, &mut out.blocks, |i, columns, blocks| {
+    fill_rows(fine, 1, out, |i, columns, blocks| {
         let (mut at, mut moved) = (0, Mat3::ZERO);
         for k in pattern.slots(i) {
             let (column, block) = (pattern.columns[k], system.blocks[k]);
@@ -812,7 +811,7 @@ impl Level {
                 }
             }
         };
-        fill_rows(&coarsening.prolongation, size, &mut prolongation.blocks, |first, columns, blocks| {
+        fill_rows(&coarsening.prolongation, size, prolongation, |first, columns, blocks| {
             for (r, row) in blocks.chunks_mut(columns.len()).enumerate() {
                 push(first + r, columns, row);
             }
