@@ -47,10 +47,10 @@ pub fn check_cloth_health(
 
 /// Measures the frame's probes over all cloths: `kinetic_energy_j`, `potential_energy_j`
 /// (gravity about y = 0 plus elastic energy), `max_strain` (largest edge strain, springs
-/// and membrane triangle sides, as the frame's health check measured it) and `pin_force_n` (magnitude of
-/// the total force the pins carry, from the forces at the frame's final state) and
-/// `self_intersections` (pairs of non-adjacent triangles of a cloth that intersect, by an
-/// exact test independent of the contact code).
+/// and membrane triangle sides, as the frame's health check measured it), `pin_force_n`
+/// (magnitude of the total force the pins carry, from the forces at the frame's final
+/// state) and `self_intersections` (pairs of non-adjacent triangles of a cloth that
+/// intersect, by an exact test independent of the contact code).
 /// Runs in [`ProbeSchedule`](crate::schedule::ProbeSchedule).
 pub fn measure_probes(
     environment: ForceEnvironment,

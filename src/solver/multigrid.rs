@@ -860,8 +860,7 @@ impl Level {
                 }
             });
         };
-        out.blocks.clear();
-        out.blocks.resize(coarse.columns.len(), Mat3::ZERO);
+        out.reset(coarse);
         pipelined(chunks, buffer, half, compute, |chunk, blocks| {
             let rows = chunk_rows(chunk);
             let first = ap.slots_of(rows.clone()).start;
