@@ -658,7 +658,9 @@ fn lumped(block: Mat3) -> Mat3 {
 ///
 /// The four shifts are tried at once, one to a lane of a `Vec4`, each lane with the
 /// operations, in their order, of `Mat3::determinant` and of the minors on its own, so
-/// the shift found is the one tried one by one would find. Tried one by one, 1.9 of them
+/// the shift found is the one tried one by one would find (the off-diagonal entries are
+/// taken as they are, not plus a zero shift, which can change only the sign of a zero,
+/// and no comparison with zero sees that). Tried one by one, 1.9 of them
 /// a block on average, the criterion was 60 % of [`lump`]'s time, and `lump` 8 % of a
 /// hang_64 step: the unpredictable number of tries cost more than the arithmetic.
 fn deficit(s: Mat3) -> f32 {
