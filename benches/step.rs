@@ -155,6 +155,7 @@ fn kernels(c: &mut Criterion) {
                 scratch: &mut scratch,
                 self_collision: false,
                 contact_springs: &mut [],
+                bodies: &[],
             };
             let mut ws = IntegratorWorkspace::default();
             ws.resize(count);

@@ -56,14 +56,7 @@ pub fn collide_with_bodies(
     total.resize(colliders.iter().len(), BodyLoad::default());
     for (cloth, material, mut particles, triangles, topology, workspace, mut stats, mut touching) in &mut cloths {
         bodies.clear();
-        bodies.extend(colliders.iter().map(|(c, prop)| ContactBody {
-            shape: c.shape.clone(),
-            state: c.motion.state_at(t),
-            friction: c.friction,
-            thickness: c.thickness + cloth.thickness,
-            response: c.response,
-            prop: prop.is_some(),
-        }));
+        bodies.extend(colliders.iter().map(|(c, prop)| c.contact_body(t, cloth.thickness, prop.is_some())));
         let Particles { position, velocity, inv_mass, .. } = &mut *particles;
         let density = material.density;
         let area = |i: usize| 1.0 / (inv_mass[i] * density);

@@ -97,7 +97,9 @@ pub fn measure_cloth_probes(
 /// Measures contact over the frame, when the scene has bodies: `contact_force_n`
 /// (magnitude of the frame-averaged vector sum of contact forces on all cloths),
 /// `contact_pressure_pa` and `friction_stress_pa` (mean normal and friction force per
-/// contact area), `max_penetration_m` (deepest particle inside a body). Runs in
+/// contact area), `max_penetration_m` (deepest particle inside a body), `contact_corrections`
+/// (particles the contact stage found within the contact thickness of a body, or whose path
+/// crossed one, and put back, summed over the frame's steps). Runs in
 /// [`ProbeSchedule`](crate::schedule::ProbeSchedule).
 pub fn measure_contact_probes(
     settings: Res<StepSettings>,
@@ -125,6 +127,7 @@ pub fn measure_contact_probes(
     probes.set("contact_pressure_pa", per_area(total.normal_impulse));
     probes.set("friction_stress_pa", per_area(total.friction_impulse));
     probes.set("max_penetration_m", f64::from(total.max_penetration));
+    probes.set("contact_corrections", f64::from(total.corrections));
 }
 
 /// Reports self contact over the frame, when a cloth collides with itself:

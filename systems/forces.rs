@@ -64,6 +64,11 @@ impl ForceEnvironment<'_> {
     pub fn time(&self) -> f32 {
         self.clock.time_s as f32
     }
+
+    /// When the step of length `dt` [s] that starts now ends [s].
+    pub fn step_end(&self, dt: f32) -> f32 {
+        self.clock.step_end(dt)
+    }
 }
 
 /// Writes the total force at the current state into [`Particles::force`], and keeps the

@@ -4,6 +4,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 
 use super::forces::{ForceElements, ForceEnvironment};
+use crate::collision::body_contact::ContactBody;
 use crate::collision::coupling::PropCoupling;
 use crate::components::{Cloth, Collider, Particles, Prop, SelfCollision, SelfTouching, SolverWorkspace, Touching};
 use crate::resources::{HealthProblem, HealthReport, IntegratorStats, SolverSettings, StepSettings};
@@ -34,6 +35,7 @@ pub fn integrate_cloths(
     )>,
     mut colliders: Query<(&Collider, Option<&mut Prop>)>,
     mut props: Local<PropCoupling>,
+    mut bodies: Local<Vec<ContactBody>>,
 ) {
     for (index, (cloth, mut particles, elements, touching, mut workspace, self_collision, self_touching)) in
         cloths.iter_mut().enumerate()
@@ -70,12 +72,17 @@ pub fn integrate_cloths(
         };
         let h = settings.dt / splits as f32;
         let model = environment.model(&particles.inv_mass, elements);
+        // The bodies where the step ends, as the contact stage after it will meet them.
+        let end = environment.step_end(settings.dt);
+        bodies.clear();
+        bodies.extend(colliders.iter().map(|(c, prop)| c.contact_body(end, cloth.thickness, prop.is_some())));
         let mut dynamics = ClothDynamics {
             model,
             free_inv_mass: &topology.free_inv_mass,
             scratch: forces,
             self_collision,
             contact_springs: self_touching.map_or(&mut [], |s| s.into_inner().0.as_mut_slice()),
+            bodies: &bodies,
         };
         let mut result = Ok(StepReport::default());
         for split in 0..splits {

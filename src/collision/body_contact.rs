@@ -54,6 +54,10 @@ pub struct ContactTotals {
     pub contact_area: f32,
     /// Deepest particle inside a body, before the response [m].
     pub max_penetration: f32,
+    /// Particles found closer to a body than the contact thickness (by more than
+    /// [`CAUGHT`] of it), or whose path crossed its surface, and put back: what the step
+    /// before left for this stage to catch.
+    pub corrections: u32,
 }
 
 impl ContactTotals {
@@ -65,8 +69,14 @@ impl ContactTotals {
         self.friction_impulse += other.friction_impulse;
         self.contact_area += other.contact_area;
         self.max_penetration = self.max_penetration.max(other.max_penetration);
+        self.corrections += other.corrections;
     }
 }
+
+/// The fraction of the contact thickness by which a particle must be closer to a body to
+/// count among the [`ContactTotals::corrections`]: an implicit step that held it on the
+/// surface leaves it at the thickness only to round-off.
+pub const CAUGHT: f32 = 0.01;
 
 /// The push of the cloth on one body over a step: what a free body needs to be moved
 /// by the cloth in turn (two-way coupling).
@@ -218,6 +228,7 @@ pub fn resolve_body_contacts(
                 let body_index = b as u32;
                 let before_body = *particle.v;
                 outcome.totals.max_penetration = outcome.totals.max_penetration.max(-near.signed);
+                outcome.totals.corrections += u32::from(near.signed < (1.0 - CAUGHT) * body.thickness);
                 outcome.totals.contact_area = particle.area;
                 // Whether it touches, whether it sticks, and the gap the next step closes.
                 let (touches, sticking, gap) = match body.response {

@@ -2,6 +2,7 @@
 //! contact response kernel ([`body_contact`]), and how free bodies take the cloth's push
 //! ([`coupling`]). Pure: no ECS.
 
+pub mod body_bounds;
 pub mod body_contact;
 pub mod bvh;
 pub mod collider;

@@ -13,7 +13,7 @@
 
 use std::sync::atomic::{AtomicU32, Ordering};
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::bvh::{Aabb, Bvh};
@@ -23,6 +23,64 @@ use crate::solver::PARALLEL_MIN_LEN;
 /// A vertex's bound as a fraction of its nearest pair's distance: below ½, with room for
 /// rounding; a pair ends at least a fifth of its distance apart.
 pub const GAMMA: f32 = 0.4;
+
+/// Where a vertex may go from the point its bounds were measured at (its anchor): within
+/// `radius` of it, and on the positive side of `plane`, the points `y` with
+/// `normal · y ≥ w` for `plane = (normal, w)` (the zero plane allows every point). Both
+/// regions are convex, so a straight move from a point within them leaves them at most
+/// once, and cutting it short there keeps all of it within. A vertex pressed against the
+/// plane is put `slack` beyond it, not on it: one on it would be across it by round-off
+/// as often as not, and every move along the plane would be cut.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bound {
+    /// Largest distance from the anchor [m].
+    pub radius: f32,
+    /// The half-space the vertex keeps to: unit normal and offset [m].
+    pub plane: Vec4,
+    /// How far beyond the plane a vertex pressed against it is put [m].
+    pub slack: f32,
+}
+
+impl Bound {
+    /// No bound.
+    pub const FREE: Self = Self { radius: f32::INFINITY, plane: Vec4::ZERO, slack: 0.0 };
+
+    /// Within `radius` [m] of the anchor, on any side.
+    pub fn within(radius: f32) -> Self {
+        Self { radius, ..Self::FREE }
+    }
+
+    /// How far `y` lies on the plane's positive side [m]: negative outside it.
+    pub fn room(&self, y: Vec3) -> f32 {
+        self.plane.truncate().dot(y) - self.plane.w
+    }
+
+    /// The fraction `t ∈ [0, 1]` of the straight move by `step` from `from` (within the
+    /// bound) that keeps the vertex within the bound about `anchor`.
+    pub fn allowed(&self, anchor: Vec3, from: Vec3, step: Vec3) -> f32 {
+        self.ball_allows(anchor, from, step).min(self.plane_allows(from, step))
+    }
+
+    /// The fraction `t ∈ [0, 1]` of the straight move by `step` from `from` that keeps
+    /// the vertex within `radius` of `anchor`.
+    pub fn ball_allows(&self, anchor: Vec3, from: Vec3, step: Vec3) -> f32 {
+        let (offset, radius) = (from - anchor, self.radius);
+        let (a, b, c) = (step.length_squared(), offset.dot(step), offset.length_squared() - radius * radius);
+        if a == 0.0 || (offset + step).length_squared() <= radius * radius {
+            return 1.0;
+        }
+        // |offset + t step|² = radius², the root in [0, 1].
+        ((-b + (b * b - a * c).max(0.0).sqrt()) / a).clamp(0.0, 1.0)
+    }
+
+    /// The fraction `t ∈ [0, 1]` of the straight move by `step` from `from` that keeps
+    /// the vertex on the plane's positive side.
+    pub fn plane_allows(&self, from: Vec3, step: Vec3) -> f32 {
+        let approach = self.plane.truncate().dot(step);
+        let room = self.room(from);
+        if approach < 0.0 && room + approach < 0.0 { (room / -approach).clamp(0.0, 1.0) } else { 1.0 }
+    }
+}
 
 /// A cloth surface whose vertices must not pass through it.
 #[derive(Debug, Clone, Copy)]
@@ -54,13 +112,13 @@ impl Clone for MotionBounds {
 }
 
 impl MotionBounds {
-    /// Sets `bounds[v]` [m] to how far vertex `v` of `surface`, at `x`, may move, looking
+    /// Sets `bounds[v]` to how far vertex `v` of `surface`, at `x`, may move, looking
     /// for pairs as far as a move of `wanted` [m] needs: the reach is `2 wanted / GAMMA`,
     /// from an eighth of the mean edge length to all of it. Each step of the search grows
     /// as the reach squared (in a heap of folds, as the layers within it), and on a
     /// smooth sheet the nearest primitives that do not touch a vertex are about 0.7 of an
     /// edge from it, so looking farther than an edge would loosen no bound.
-    pub fn compute(&mut self, surface: Surface<'_>, x: &[Vec3], wanted: f32, bounds: &mut [f32]) {
+    pub fn compute(&mut self, surface: Surface<'_>, x: &[Vec3], wanted: f32, bounds: &mut [Bound]) {
         let Surface { triangles, edges } = surface;
         let edge = if edges.is_empty() {
             0.0
@@ -129,7 +187,7 @@ impl MotionBounds {
             .par_iter_mut()
             .zip(nearest.par_iter())
             .with_min_len(PARALLEL_MIN_LEN)
-            .for_each(|(bound, d)| *bound = GAMMA * f32::from_bits(d.load(Ordering::Relaxed)));
+            .for_each(|(bound, d)| *bound = Bound::within(GAMMA * f32::from_bits(d.load(Ordering::Relaxed))));
     }
 }
 
@@ -143,7 +201,7 @@ pub(crate) mod tests {
     pub(crate) struct Lcg(pub(crate) u64);
 
     impl Lcg {
-        fn next(&mut self) -> f32 {
+        pub(crate) fn next(&mut self) -> f32 {
             self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             (self.0 >> 40) as f32 / (1u64 << 24) as f32
         }
@@ -206,12 +264,12 @@ pub(crate) mod tests {
         let (x0, triangles) = two_layers(&mut rng);
         let edges = ContactMesh::edges_of(&triangles);
         let surface = Surface { triangles: &triangles, edges: &edges };
-        let mut bounds = vec![0.0; x0.len()];
+        let mut bounds = vec![Bound::FREE; x0.len()];
         let mut motion = MotionBounds::default();
         motion.compute(surface, &x0, 1.0, &mut bounds);
         // Each bound is at most GAMMA times the layers' gap: the nearest pair of a vertex
         // is across the gap (4 ± 1.5 mm) or along its own sheet (7 mm).
-        assert!(bounds.iter().all(|&b| b > 0.0 && b <= GAMMA * 0.0055 + 1e-6), "{bounds:?}");
+        assert!(bounds.iter().all(|b| b.plane == Vec4::ZERO && b.radius > 0.0 && b.radius <= GAMMA * 0.0055 + 1e-6));
         // Every vertex moves its whole bound, the top layer down and the bottom up or in
         // random directions: nothing crosses.
         for trial in 0..20 {
@@ -222,7 +280,7 @@ pub(crate) mod tests {
                 .map(|(i, (p, b))| {
                     let towards = if i < 36 { Vec3::Y } else { -Vec3::Y };
                     let direction = if trial % 2 == 0 { towards } else { rng.direction() };
-                    *p + *b * direction
+                    *p + b.radius * direction
                 })
                 .collect();
             assert!(!any_crossing(&triangles, &edges, &x0, &x1), "trial {trial} crossed");
@@ -232,7 +290,7 @@ pub(crate) mod tests {
             x0.iter().enumerate().map(|(i, p)| if i < 36 { *p } else { *p - 0.012 * Vec3::Y }).collect();
         assert!(any_crossing(&triangles, &edges, &x0, &through));
         // A second call over the same mesh gives the same bounds.
-        let mut again = vec![0.0; x0.len()];
+        let mut again = vec![Bound::FREE; x0.len()];
         motion.compute(surface, &x0, 1.0, &mut again);
         assert_eq!(again, bounds);
     }
@@ -252,13 +310,13 @@ pub(crate) mod tests {
             }
         }
         let edges = ContactMesh::edges_of(&triangles);
-        let mut bounds = vec![0.0; x.len()];
+        let mut bounds = vec![Bound::FREE; x.len()];
         MotionBounds::default().compute(Surface { triangles: &triangles, edges: &edges }, &x, 1.0, &mut bounds);
         let reach: f32 =
             edges.iter().map(|&[a, b]| x[a as usize].distance(x[b as usize])).sum::<f32>() / edges.len() as f32;
         assert!(reach > std::f32::consts::FRAC_1_SQRT_2);
         for (v, b) in bounds.iter().enumerate() {
-            assert!((b - GAMMA * std::f32::consts::FRAC_1_SQRT_2).abs() < 1e-6, "vertex {v}: {b}");
+            assert!((b.radius - GAMMA * std::f32::consts::FRAC_1_SQRT_2).abs() < 1e-6, "vertex {v}: {b:?}");
         }
     }
 }

@@ -5,7 +5,7 @@ use std::sync::Arc;
 use bevy_ecs::prelude::*;
 use parry3d::shape::SharedShape;
 
-use crate::collision::body_contact::{ContactTotals, Touch};
+use crate::collision::body_contact::{ContactBody, ContactTotals, Touch};
 use crate::collision::collider::{ColliderMotion, ContactResponse};
 use crate::collision::features::SharpFeatures;
 use crate::solver::contact_springs::ContactSpring;
@@ -43,6 +43,19 @@ impl Collider {
     ) -> Collider {
         let features = SharpFeatures::of_shape(&shape).map(Arc::new);
         Collider { name, shape, motion, friction, thickness, response, features }
+    }
+
+    /// The collider as the contact kernel sees it at time `t` [s] against a cloth of
+    /// contact thickness `cloth_thickness` [m]; `prop` says whether it is a free prop.
+    pub fn contact_body(&self, t: f32, cloth_thickness: f32, prop: bool) -> ContactBody {
+        ContactBody {
+            shape: self.shape.clone(),
+            state: self.motion.state_at(t),
+            friction: self.friction,
+            thickness: self.thickness + cloth_thickness,
+            response: self.response,
+            prop,
+        }
     }
 }
 

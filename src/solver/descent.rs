@@ -15,19 +15,25 @@
 //! conjugate gradients of [`super::implicit`]: a particle's Newton step is taken within
 //! the directions its filter leaves free, `c = (S A_ii S + I − S)⁻¹ S r`.
 //!
-//! Contact with the cloth itself bounds every iteration ([`BoundedMotion`]): each particle
-//! keeps within its bound of a configuration free of crossings ([`MotionBounds`]), its
-//! Newton step cut short where it would leave it, so no sweep carries a vertex through a
-//! triangle or an edge through an edge. Bounds that cut steps short are measured again
-//! from where the particles are after sweeps 1, 2, 4, 8…, so a particle stopped at its
-//! bound goes on in the sweeps after.
+//! Contact with the cloth itself and with solid bodies bounds every iteration
+//! ([`BoundedMotion`]): each particle keeps within its [`Bound`] of a configuration free of
+//! crossings and of bodies ([`MotionBounds`], [`body_bounds`]), so no sweep carries a
+//! vertex through a triangle, an edge through an edge, or a vertex into a body. A Newton
+//! step that would leave the bound's ball is cut short on its own line; one that would
+//! cross its plane (a body's tangent plane) is first projected onto it, the minimum of the
+//! particle's energy on its side (the contact force the body gives it), so a particle
+//! landing on a body slides along it within the sweeps. Bounds that cut steps short are
+//! measured again from where the particles are after sweeps 1, 2, 4, 8…, so a particle
+//! stopped at its bound goes on in the sweeps after.
 //!
 //! [`MotionBounds`]: crate::collision::motion_bounds::MotionBounds
+//! [`body_bounds`]: crate::collision::body_bounds
 
 use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
 use super::elements::{BlockMatrix, BlockPattern};
+use crate::collision::motion_bounds::Bound;
 
 /// Rows per parallel task in a colour: a row is a few hundred flops, and colours are a
 /// fraction of the cloth, so the cut-off is lower than the crate's.
@@ -105,8 +111,8 @@ pub struct DescentSettings {
     /// Estimated spectral radius ρ ∈ [0, 1) of a Gauss–Seidel sweep, which sets the
     /// Chebyshev weights; 0 turns the acceleration off. Too high a value overshoots.
     pub spectral_radius: f32,
-    /// Whether a self-colliding cloth's contact with itself bounds every sweep
-    /// ([`BoundedMotion`]).
+    /// Whether a self-colliding cloth's contact with itself, and every cloth's contact with
+    /// the solid bodies, bounds every sweep ([`BoundedMotion`]).
     pub contact_bounds: bool,
 }
 
@@ -127,24 +133,24 @@ pub struct DescentWorkspace {
     /// Per row of the colour being swept: its correction, squared residual and whether
     /// its bound cut the correction short.
     update: Vec<(Vec3, f64, bool)>,
-    /// Per particle, how far it may move from the anchor [m].
-    bounds: Vec<f32>,
+    /// Per particle, where it may move from the anchor.
+    bounds: Vec<Bound>,
 }
 
-/// Where block descent's iterate puts the particles, and how far they may move: particle
-/// `i` is at `base[i] + scale · delta[i]`, and may be at most `bounds[i]` from
+/// Where block descent's iterate puts the particles, and where they may move: particle
+/// `i` is at `base[i] + scale · delta[i]`, and keeps within `bounds[i]` about
 /// `anchor[i]`, bounds that `bound` measures at a configuration.
 pub struct BoundedMotion<'a> {
     /// Positions at `delta = 0` [m].
     pub base: &'a [Vec3],
     /// How far a unit of `delta` moves a particle [m per unit].
     pub scale: f32,
-    /// A configuration free of crossings; on return, where the particles end, which is
-    /// one too.
+    /// A configuration free of crossings and outside the bodies; on return, where the
+    /// particles end, which is one too.
     pub anchor: &'a mut [Vec3],
-    /// Fills, for the particles at the given positions, how far each may move [m], asked
-    /// for moves as long as the second argument [m] where the geometry allows them.
-    pub bound: &'a mut dyn FnMut(&[Vec3], f32, &mut [f32]),
+    /// Fills, for the particles at the given positions, where each may move, asked for
+    /// moves as long as the second argument [m] where the geometry allows them.
+    pub bound: &'a mut dyn FnMut(&[Vec3], f32, &mut [Bound]),
 }
 
 impl BoundedMotion<'_> {
@@ -184,16 +190,35 @@ impl Frame<'_> {
     }
 
     /// The fraction of the change `change` to particle `i`'s `delta` that keeps it within
-    /// `bound` of its anchor (where it is within it): the move is cut short on its own
+    /// `bound` about its anchor (where it is within it): the move is cut short on its own
     /// line, so a cut Newton step still descends the energy.
-    fn allowed(&self, i: usize, delta: Vec3, change: Vec3, bound: f32) -> f32 {
-        let (offset, step) = (self.offset(i, delta), self.scale * change);
-        let (a, b, c) = (step.length_squared(), offset.dot(step), offset.length_squared() - bound * bound);
-        if a == 0.0 || (offset + step).length_squared() <= bound * bound {
-            return 1.0;
+    fn allowed(&self, i: usize, delta: Vec3, change: Vec3, bound: &Bound) -> f32 {
+        bound.allowed(self.anchor[i], position(self.base, self.scale, i, delta), self.scale * change)
+    }
+
+    /// Particle `i`'s Newton step from `delta` for the residual `r`, `newton` its filtered
+    /// inverse diagonal block, within `bound`: projected onto the bound's plane where it
+    /// would come within its slack (the minimum of the row's quadratic energy on that side, the
+    /// multiple of `newton · normal` that the plane's push adds), then cut short on its
+    /// line where it would leave the ball. The projection puts it the bound's slack beyond
+    /// the plane. Returns the step, the part of `r` that the plane does not bear (all of
+    /// it unless the plane pushes), and whether the bound cut the step: the ball did, or
+    /// the plane where projecting did not do.
+    fn newton_step(&self, i: usize, delta: Vec3, newton: Mat3, r: Vec3, bound: &Bound) -> (Vec3, Vec3, bool) {
+        let (mut correction, mut r) = (newton * r, r);
+        let from = position(self.base, self.scale, i, delta);
+        let normal = bound.plane.truncate();
+        let beyond = bound.room(from + self.scale * correction) - bound.slack;
+        let push = newton * normal;
+        let stiffness = self.scale * normal.dot(push);
+        let projected = beyond < 0.0 && stiffness > 0.0;
+        if projected {
+            correction -= (beyond / stiffness) * push;
+            r -= normal.dot(r).min(0.0) * normal;
         }
-        // |offset + t step|² = bound², the root in [0, 1].
-        ((-b + (b * b - a * c).max(0.0).sqrt()) / a).clamp(0.0, 1.0)
+        let step = self.scale * correction;
+        let (ball, plane) = (bound.ball_allows(self.anchor[i], from, step), bound.plane_allows(from, step));
+        (ball.min(plane) * correction, r, ball < 1.0 || (plane < 1.0 && !projected))
     }
 }
 
@@ -210,7 +235,7 @@ const MAX_ADVANCES: u32 = 16;
 /// Starting the sweeps from the bounds instead, every particle held back by them, would
 /// leave the sweeps a global error to remove, which Gauss–Seidel removes last: a falling
 /// strip's speed stayed at the bound per step.
-fn advance_anchor(motion: &mut BoundedMotion<'_>, delta: &mut [Vec3], filter: &[Mat3], bounds: &mut [f32]) -> f32 {
+fn advance_anchor(motion: &mut BoundedMotion<'_>, delta: &mut [Vec3], filter: &[Mat3], bounds: &mut [Bound]) -> f32 {
     let n = delta.len();
     let mut wanted = f32::INFINITY;
     for advance in 1..=MAX_ADVANCES {
@@ -227,7 +252,7 @@ fn advance_anchor(motion: &mut BoundedMotion<'_>, delta: &mut [Vec3], filter: &[
         let beyond = (0..n)
             .into_par_iter()
             .with_min_len(super::PARALLEL_MIN_LEN)
-            .filter(|&i| frame.offset(i, delta[i]).length() > bounds[i])
+            .filter(|&i| reach(&bounds[i], frame.anchor[i], frame.offset(i, delta[i])) < 1.0)
             .count();
         if beyond == 0 || slowing || advance == MAX_ADVANCES {
             break;
@@ -235,24 +260,32 @@ fn advance_anchor(motion: &mut BoundedMotion<'_>, delta: &mut [Vec3], filter: &[
         let (base, scale, delta) = (motion.base, motion.scale, &*delta);
         motion.anchor.par_iter_mut().enumerate().with_min_len(super::PARALLEL_MIN_LEN).for_each(|(i, anchor)| {
             let offset = position(base, scale, i, delta[i]) - *anchor;
-            *anchor += offset * (bounds[i] / offset.length()).min(1.0);
+            *anchor += offset * reach(&bounds[i], *anchor, offset);
         });
     }
     let frame = motion.frame();
     delta.par_iter_mut().zip(bounds.par_iter_mut()).enumerate().with_min_len(super::PARALLEL_MIN_LEN).for_each(
         |(i, (d, bound))| {
             let offset = frame.offset(i, *d);
-            let length = offset.length();
-            if length > *bound {
+            let allowed = reach(bound, frame.anchor[i], offset);
+            if allowed < 1.0 {
                 if filter[i] == Mat3::IDENTITY {
-                    *d += offset * (*bound / length - 1.0) / frame.scale;
+                    *d += offset * (allowed - 1.0) / frame.scale;
                 } else {
-                    *bound = f32::INFINITY;
+                    *bound = Bound::FREE;
                 }
             }
         },
     );
     wanted
+}
+
+/// The fraction of the straight move `offset` from `anchor` that keeps within `bound`:
+/// the ball's part as the ratio of lengths, 1 if the move ends within it.
+fn reach(bound: &Bound, anchor: Vec3, offset: Vec3) -> f32 {
+    let length = offset.length();
+    let ball = if length > bound.radius { bound.radius / length } else { 1.0 };
+    ball.min(bound.plane_allows(anchor, offset))
 }
 
 /// Improves `delta` towards the solution of `system · delta = rhs` within the per-particle
@@ -290,7 +323,7 @@ pub fn descend(
     // particle from its anchor.
     let mut wanted = 0.0f32;
     if let Some(motion) = &mut motion {
-        ws.bounds.resize(n, 0.0);
+        ws.bounds.resize(n, Bound::FREE);
         wanted = advance_anchor(motion, delta, filter, &mut ws.bounds);
     }
     let target: f64 = f64::from(tolerance).powi(2)
@@ -318,9 +351,11 @@ pub fn descend(
                     product += system.blocks[k] * current[pattern.columns[k] as usize];
                 }
                 let r = filter[i] * (rhs[i] - product);
-                let correction = step[i] * r;
-                let allowed = frame.map_or(1.0, |f| f.allowed(i, current[i], correction, bounds[i]));
-                *update = (allowed * correction, f64::from(r.length_squared()), allowed < 1.0);
+                let (correction, r, cut) = match frame {
+                    Some(f) => f.newton_step(i, current[i], step[i], r, &bounds[i]),
+                    None => (step[i] * r, r, false),
+                };
+                *update = (correction, f64::from(r.length_squared()), cut);
             });
             for (&i, &(correction, r2, cut)) in rows.iter().zip(&ws.update) {
                 delta[i as usize] += correction;
@@ -352,7 +387,7 @@ pub fn descend(
                 .with_min_len(super::PARALLEL_MIN_LEN)
                 .map(|(i, (d, p))| {
                     let extrapolated = omega * (*d - *p) + *p;
-                    let allowed = frame.map_or(1.0, |f| f.allowed(i, *d, extrapolated - *d, bounds[i]));
+                    let allowed = frame.map_or(1.0, |f| f.allowed(i, *d, extrapolated - *d, &bounds[i]));
                     *d = if allowed < 1.0 { *d + allowed * (extrapolated - *d) } else { extrapolated };
                     u32::from(allowed < 1.0)
                 })
@@ -379,7 +414,13 @@ pub fn descend(
 
 #[cfg(test)]
 mod tests {
+    use parry3d::math::Pose3;
+    use parry3d::shape::SharedShape;
+
     use super::*;
+    use crate::collision::body_bounds;
+    use crate::collision::body_contact::ContactBody;
+    use crate::collision::collider::{ColliderState, ContactResponse};
     use crate::collision::motion_bounds::tests::{Lcg, any_crossing, two_layers};
     use crate::collision::motion_bounds::{MotionBounds, Surface};
     use crate::collision::self_contact::ContactMesh;
@@ -496,6 +537,61 @@ mod tests {
     }
 
     #[test]
+    fn bounded_sweeps_never_carry_a_sheet_into_a_body_and_let_it_slide_on_it() {
+        // Two sheets 4 mm apart over the top of a sphere 4 mm below them, one step of
+        // 1/60 s whose solution moves them 12 mm down, into it.
+        let (x0, triangles) = two_layers(&mut Lcg(5));
+        let edges = ContactMesh::edges_of(&triangles);
+        let n = x0.len();
+        let (h, mass, stiffness, thickness) = (1.0f32 / 60.0, 1e-3f32, 10.0f32, 1e-3f32);
+        let (radius, centre) = (0.1f32, Vec3::new(0.025, -0.104, 0.025));
+        let sphere = ContactBody {
+            shape: SharedShape::ball(radius),
+            state: ColliderState { pose: Pose3::from_translation(centre), linear: Vec3::ZERO, angular: Vec3::ZERO },
+            friction: 0.0,
+            thickness,
+            response: ContactResponse::Slide,
+            prop: false,
+        };
+        let pattern = BlockPattern::from_stencils(n, edges.iter().map(|e| &e[..]));
+        let mut system = BlockMatrix::default();
+        system.reset(&pattern);
+        system.add_diagonal(&pattern, |_| mass);
+        let k = Mat3::from_diagonal(Vec3::splat(h * h * stiffness));
+        for e in &edges {
+            system.add_local(&pattern.stencil_slots(*e), &[[k, -k], [-k, k]]);
+        }
+        let solution = vec![-0.012 / h * Vec3::Y; n];
+        let mut rhs = vec![Vec3::ZERO; n];
+        system.multiply(&pattern, &solution, &mut rhs);
+        let (colouring, filter) = (Colouring::greedy(&pattern), vec![Mat3::IDENTITY; n]);
+        let after = |sweeps: u32, bounded: bool| -> Vec<Vec3> {
+            let settings = DescentSettings { sweeps, ..DescentSettings::default() };
+            let (mut delta, mut ws, mut anchor) = (vec![Vec3::ZERO; n], DescentWorkspace::default(), x0.clone());
+            let mut bound = |x: &[Vec3], _: f32, out: &mut [Bound]| {
+                out.fill(Bound::FREE);
+                body_bounds::limit(std::slice::from_ref(&sphere), x, out);
+            };
+            let motion = bounded.then(|| BoundedMotion { base: &x0, scale: h, anchor: &mut anchor, bound: &mut bound });
+            descend(&pattern, &colouring, &system, &rhs, &filter, &settings, 0.0, motion, &mut delta, &mut ws);
+            x0.iter().zip(&delta).map(|(x, d)| *x + h * *d).collect()
+        };
+        let clearance = |x: &[Vec3]| x.iter().map(|p| p.distance(centre) - radius).fold(f32::INFINITY, f32::min);
+        for sweeps in 1..=30 {
+            let nearest = clearance(&after(sweeps, true));
+            assert!(nearest >= 0.995 * thickness - 1e-6, "sweep {sweeps}: {nearest} m from the sphere");
+        }
+        // The lower sheet comes to rest on the sphere, at the thickness, and its sides
+        // slide down along it: they end lower than the top of the sphere.
+        let last = after(30, true);
+        assert!(clearance(&last) < 1.01 * thickness);
+        let top = centre.y + radius + thickness;
+        assert!(last[..36].iter().any(|p| p.y < top - 0.001), "nothing slid down the sphere");
+        // Unbounded, the sweeps carry it into the sphere.
+        assert!(clearance(&after(30, false)) < -0.005);
+    }
+
+    #[test]
     fn bounded_sweeps_never_carry_a_layer_through_another() {
         // Two sheets 4 mm apart, springs along their edges, one step of 1/60 s whose
         // solution moves the upper sheet 12 mm down, through the lower one.
@@ -522,7 +618,7 @@ mod tests {
             let settings = DescentSettings { sweeps, ..DescentSettings::default() };
             let (mut delta, mut ws) = (vec![Vec3::ZERO; n], DescentWorkspace::default());
             let (mut search, mut anchor) = (MotionBounds::default(), x0.clone());
-            let mut bound = |x: &[Vec3], wanted: f32, out: &mut [f32]| search.compute(surface, x, wanted, out);
+            let mut bound = |x: &[Vec3], wanted: f32, out: &mut [Bound]| search.compute(surface, x, wanted, out);
             let motion = bounded.then(|| BoundedMotion { base: &x0, scale: h, anchor: &mut anchor, bound: &mut bound });
             descend(&pattern, &colouring, &system, &rhs, &filter, &settings, 0.0, motion, &mut delta, &mut ws);
             x0.iter().zip(&delta).map(|(x, d)| *x + h * *d).collect()

@@ -13,6 +13,7 @@ use super::integrate::Dynamics;
 use super::multigrid::Hierarchy;
 use super::pipeline::pipelined;
 use super::reduce;
+use crate::collision::body_contact::ContactBody;
 use crate::collision::motion_bounds::Surface;
 use crate::components::{BendingHinges, ClothTopology, MembraneTriangles, Springs};
 
@@ -465,6 +466,8 @@ pub struct ClothDynamics<'a> {
     pub self_collision: bool,
     /// The cloth–cloth contacts the implicit step holds apart.
     pub contact_springs: &'a mut [ContactSpring],
+    /// The solid bodies where the step ends, which bound block descent's iterations.
+    pub bodies: &'a [ContactBody],
 }
 
 impl Dynamics for ClothDynamics<'_> {
@@ -496,6 +499,10 @@ impl LinearDynamics for ClothDynamics<'_> {
 
     fn contact_surface(&self) -> Option<Surface<'_>> {
         self.self_collision.then_some(Surface { triangles: self.model.triangles, edges: &self.model.topology.edges })
+    }
+
+    fn contact_bodies(&self) -> &[ContactBody] {
+        self.bodies
     }
 
     fn hierarchy(&self) -> &Hierarchy {

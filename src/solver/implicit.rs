@@ -28,7 +28,9 @@ use super::elements::spring::outer;
 use super::elements::{BlockMatrix, BlockPattern, VelocityJacobian};
 use super::integrate::{Dynamics, StepReport};
 use super::multigrid::{Hierarchy, Multigrid};
-use crate::collision::motion_bounds::{MotionBounds, Surface};
+use crate::collision::body_bounds;
+use crate::collision::body_contact::ContactBody;
+use crate::collision::motion_bounds::{Bound, MotionBounds, Surface};
 
 /// Rayleigh damping `C = αM + βK_s` (K_s the stiffness, `−∂f/∂x`).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -99,6 +101,10 @@ pub trait LinearDynamics: Dynamics + Sync {
     /// the system collides with itself.
     fn contact_surface(&self) -> Option<Surface<'_>> {
         None
+    }
+    /// The solid bodies, where the step ends, that bound each iteration of block descent.
+    fn contact_bodies(&self) -> &[ContactBody] {
+        &[]
     }
     /// The cloth–cloth contacts the step holds apart with springs in the solve.
     fn contact_springs(&self) -> &[ContactSpring] {
@@ -248,7 +254,7 @@ pub fn implicit_step(
     prescribe(dynamics, constraints, v, &mut ws.prescribed);
     let (theta, Rayleigh { alpha, beta }) = (settings.theta, settings.rayleigh);
     let mut report = StepReport { accepted: 1, ..StepReport::default() };
-    if bounding_surface(settings, dynamics).is_some() {
+    if bounded(settings, dynamics) {
         // The step starts free of crossings, and at Δv = 0 moves inertially.
         ws.anchor.clear();
         ws.anchor.extend_from_slice(x);
@@ -549,13 +555,11 @@ enum Start {
     Given,
 }
 
-/// The surface whose contact with itself bounds block descent's iterations, if the
-/// settings' solver is block descent with contact bounds and the system collides with
-/// itself.
-fn bounding_surface<'a>(settings: &ImplicitSettings, dynamics: &'a impl LinearDynamics) -> Option<Surface<'a>> {
+/// Whether contact bounds block descent's iterations: the settings' solver is block
+/// descent with contact bounds, and the system collides with itself or with bodies.
+fn bounded(settings: &ImplicitSettings, dynamics: &impl LinearDynamics) -> bool {
     matches!(settings.linear_solver, LinearSolver::BlockDescent(d) if d.contact_bounds)
-        .then(|| dynamics.contact_surface())
-        .flatten()
+        && (dynamics.contact_surface().is_some() || !dynamics.contact_bodies().is_empty())
 }
 
 /// Solves `A delta = rhs` (the system and the contact springs) within the filters with the
@@ -596,8 +600,14 @@ fn solve(
         }
         LinearSolver::BlockDescent(descent) => {
             let ImplicitWorkspace { x: base, anchor, motion_bounds, .. } = ws;
-            let mut bound = bounding_surface(settings, dynamics)
-                .map(|s| move |x: &[Vec3], wanted: f32, out: &mut [f32]| motion_bounds.compute(s, x, wanted, out));
+            let (surface, bodies) = (dynamics.contact_surface(), dynamics.contact_bodies());
+            let mut bound = bounded(settings, dynamics).then_some(move |x: &[Vec3], wanted: f32, out: &mut [Bound]| {
+                match surface {
+                    Some(surface) => motion_bounds.compute(surface, x, wanted, out),
+                    None => out.fill(Bound::FREE),
+                }
+                body_bounds::limit(bodies, x, out);
+            });
             let motion = bound.as_mut().map(|bound| BoundedMotion { base, scale, anchor, bound });
             descend(
                 pattern,

@@ -91,6 +91,7 @@ impl ParticleSystem {
             scratch: &mut scratch,
             self_collision: false,
             contact_springs: &mut [],
+            bodies: &[],
         };
         let mut x = self.x.clone();
         let mut v = vec![Vec3::ZERO; x.len()];
