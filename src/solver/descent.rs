@@ -197,21 +197,31 @@ impl Frame<'_> {
     }
 
     /// Particle `i`'s Newton step from `delta` for the residual `r`, `newton` its filtered
-    /// inverse diagonal block, within `bound`: projected onto the bound's plane where it
-    /// would come within its slack (the minimum of the row's quadratic energy on that side, the
-    /// multiple of `newton · normal` that the plane's push adds), then cut short on its
-    /// line where it would leave the ball. The projection puts it the bound's slack beyond
-    /// the plane. Returns the step, the part of `r` that the plane does not bear (all of
-    /// it unless the plane pushes), and whether the bound cut the step: the ball did, or
-    /// the plane where projecting did not do.
-    fn newton_step(&self, i: usize, delta: Vec3, newton: Mat3, r: Vec3, bound: &Bound) -> (Vec3, Vec3, bool) {
+    /// inverse diagonal block, within `bound`: if the particle is `free` of constraints,
+    /// projected onto the bound's plane where it would come within its slack (the minimum
+    /// of the row's energy on that side, the multiple of `newton · normal` that the
+    /// plane's push adds); then cut short on its line where it would leave the bound. The
+    /// projection puts it the slack beyond the plane. A constrained particle is only cut:
+    /// its filter may leave the plane's normal almost no room, and the projection would
+    /// then throw it far along the plane. Returns the step, the part of `r` that the plane
+    /// does not bear (all of it unless the plane pushes), and whether the bound cut the
+    /// step: the ball did, or the plane where projecting did not do.
+    fn newton_step(
+        &self,
+        i: usize,
+        delta: Vec3,
+        newton: Mat3,
+        r: Vec3,
+        bound: &Bound,
+        free: bool,
+    ) -> (Vec3, Vec3, bool) {
         let (mut correction, mut r) = (newton * r, r);
         let from = position(self.base, self.scale, i, delta);
         let normal = bound.plane.truncate();
         let beyond = bound.room(from + self.scale * correction) - bound.slack;
         let push = newton * normal;
         let stiffness = self.scale * normal.dot(push);
-        let projected = beyond < 0.0 && stiffness > 0.0;
+        let projected = free && beyond < 0.0 && stiffness > 0.0;
         if projected {
             correction -= (beyond / stiffness) * push;
             r -= normal.dot(r).min(0.0) * normal;
@@ -352,7 +362,7 @@ pub fn descend(
                 }
                 let r = filter[i] * (rhs[i] - product);
                 let (correction, r, cut) = match frame {
-                    Some(f) => f.newton_step(i, current[i], step[i], r, &bounds[i]),
+                    Some(f) => f.newton_step(i, current[i], step[i], r, &bounds[i], filter[i] == Mat3::IDENTITY),
                     None => (step[i] * r, r, false),
                 };
                 *update = (correction, f64::from(r.length_squared()), cut);
