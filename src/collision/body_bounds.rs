@@ -87,7 +87,7 @@ pub fn limit(bodies: &[ContactBody], x: &[Vec3], bounds: &mut [Bound]) {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use parry3d::math::Pose3;
     use parry3d::shape::SharedShape;
 
@@ -95,9 +95,11 @@ mod tests {
     use crate::collision::collider::{ColliderState, ContactResponse};
     use crate::collision::motion_bounds::tests::Lcg;
 
-    const THICKNESS: f32 = 0.001;
+    /// The contact thickness of the test bodies [m].
+    pub(crate) const THICKNESS: f32 = 0.001;
 
-    fn body(shape: SharedShape, at: Vec3) -> ContactBody {
+    /// A still body of `shape` at `at`, frictionless, [`THICKNESS`] thick.
+    pub(crate) fn body(shape: SharedShape, at: Vec3) -> ContactBody {
         ContactBody {
             shape,
             state: ColliderState { pose: Pose3::from_translation(at), linear: Vec3::ZERO, angular: Vec3::ZERO },

@@ -424,13 +424,11 @@ pub fn descend(
 
 #[cfg(test)]
 mod tests {
-    use parry3d::math::Pose3;
     use parry3d::shape::SharedShape;
 
     use super::*;
     use crate::collision::body_bounds;
-    use crate::collision::body_contact::ContactBody;
-    use crate::collision::collider::{ColliderState, ContactResponse};
+    use crate::collision::body_bounds::tests::{THICKNESS, body};
     use crate::collision::motion_bounds::tests::{Lcg, any_crossing, two_layers};
     use crate::collision::motion_bounds::{MotionBounds, Surface};
     use crate::collision::self_contact::ContactMesh;
@@ -446,6 +444,20 @@ mod tests {
         let stiffness = Mat3::from_diagonal(Vec3::splat(k));
         for p in &pairs {
             system.add_local(&pattern.stencil_slots(*p), &[[stiffness, -stiffness], [-stiffness, stiffness]]);
+        }
+        (pattern, system)
+    }
+
+    /// `n` particles of 1 g joined along `edges` by springs of 10 N/m, as the system
+    /// `M + h² K` of an implicit step of `h` [s].
+    fn edge_springs(n: usize, edges: &[[u32; 2]], h: f32) -> (BlockPattern, BlockMatrix) {
+        let pattern = BlockPattern::from_stencils(n, edges.iter().map(|e| &e[..]));
+        let mut system = BlockMatrix::default();
+        system.reset(&pattern);
+        system.add_diagonal(&pattern, |_| 1e-3);
+        let k = Mat3::from_diagonal(Vec3::splat(h * h * 10.0));
+        for e in edges {
+            system.add_local(&pattern.stencil_slots(*e), &[[k, -k], [-k, k]]);
         }
         (pattern, system)
     }
@@ -551,26 +563,10 @@ mod tests {
         // Two sheets 4 mm apart over the top of a sphere 4 mm below them, one step of
         // 1/60 s whose solution moves them 12 mm down, into it.
         let (x0, triangles) = two_layers(&mut Lcg(5));
-        let edges = ContactMesh::edges_of(&triangles);
-        let n = x0.len();
-        let (h, mass, stiffness, thickness) = (1.0f32 / 60.0, 1e-3f32, 10.0f32, 1e-3f32);
+        let (n, h, thickness) = (x0.len(), 1.0f32 / 60.0, THICKNESS);
         let (radius, centre) = (0.1f32, Vec3::new(0.025, -0.104, 0.025));
-        let sphere = ContactBody {
-            shape: SharedShape::ball(radius),
-            state: ColliderState { pose: Pose3::from_translation(centre), linear: Vec3::ZERO, angular: Vec3::ZERO },
-            friction: 0.0,
-            thickness,
-            response: ContactResponse::Slide,
-            prop: false,
-        };
-        let pattern = BlockPattern::from_stencils(n, edges.iter().map(|e| &e[..]));
-        let mut system = BlockMatrix::default();
-        system.reset(&pattern);
-        system.add_diagonal(&pattern, |_| mass);
-        let k = Mat3::from_diagonal(Vec3::splat(h * h * stiffness));
-        for e in &edges {
-            system.add_local(&pattern.stencil_slots(*e), &[[k, -k], [-k, k]]);
-        }
+        let sphere = body(SharedShape::ball(radius), centre);
+        let (pattern, system) = edge_springs(n, &ContactMesh::edges_of(&triangles), h);
         let solution = vec![-0.012 / h * Vec3::Y; n];
         let mut rhs = vec![Vec3::ZERO; n];
         system.multiply(&pattern, &solution, &mut rhs);
@@ -607,16 +603,8 @@ mod tests {
         // solution moves the upper sheet 12 mm down, through the lower one.
         let (x0, triangles) = two_layers(&mut Lcg(7));
         let edges = ContactMesh::edges_of(&triangles);
-        let n = x0.len();
-        let (h, mass, stiffness) = (1.0f32 / 60.0, 1e-3f32, 10.0f32);
-        let pattern = BlockPattern::from_stencils(n, edges.iter().map(|e| &e[..]));
-        let mut system = BlockMatrix::default();
-        system.reset(&pattern);
-        system.add_diagonal(&pattern, |_| mass);
-        let k = Mat3::from_diagonal(Vec3::splat(h * h * stiffness));
-        for e in &edges {
-            system.add_local(&pattern.stencil_slots(*e), &[[k, -k], [-k, k]]);
-        }
+        let (n, h) = (x0.len(), 1.0f32 / 60.0);
+        let (pattern, system) = edge_springs(n, &edges, h);
         let solution: Vec<Vec3> = (0..n).map(|i| if i >= 36 { -0.012 / h * Vec3::Y } else { Vec3::ZERO }).collect();
         let mut rhs = vec![Vec3::ZERO; n];
         system.multiply(&pattern, &solution, &mut rhs);
