@@ -40,6 +40,12 @@ impl Aabb {
         !(self.min.cmpgt(other.max).any() || other.min.cmpgt(self.max).any())
     }
 
+    /// The shortest distance between a point of this box and a point of `other`: a lower
+    /// bound on the distance between anything the two hold.
+    pub fn distance(&self, other: &Aabb) -> f32 {
+        (self.min - other.max).max(other.min - self.max).max(Vec3::ZERO).length()
+    }
+
     fn centre(&self) -> Vec3 {
         0.5 * (self.min + self.max)
     }
@@ -273,6 +279,16 @@ mod tests {
             assert_eq!(found(&tree, q), brute_force(&moved, q));
         }
         assert_eq!(tree.builds(), 1);
+    }
+
+    #[test]
+    fn the_distance_between_boxes_is_that_of_their_nearest_points() {
+        let unit = cube(Vec3::ZERO, 0.5);
+        assert_eq!(unit.distance(&cube(Vec3::new(0.7, 0.2, 0.0), 0.5)), 0.0);
+        assert_eq!(unit.distance(&cube(Vec3::new(0.0, -3.0, 0.0), 0.5)), 2.0);
+        let corner = cube(Vec3::new(4.0, 5.0, -1.0), 0.5);
+        assert_eq!(unit.distance(&corner), Vec3::new(3.0, 4.0, 0.0).length());
+        assert_eq!(corner.distance(&unit), unit.distance(&corner));
     }
 
     #[test]

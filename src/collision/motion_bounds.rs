@@ -143,17 +143,25 @@ impl MotionBounds {
             .par_iter()
             .with_min_len(PARALLEL_MIN_LEN)
             .for_each(|d| d.store(reach.to_bits(), Ordering::Relaxed));
-        let Self { triangle_tree, edge_tree, edge_boxes, nearest, .. } = &*self;
+        let Self { triangle_tree, edge_tree, triangle_boxes, edge_boxes, nearest } = &*self;
         let lower = |k: u32, d: f32| {
             nearest[k as usize].fetch_min(d.to_bits(), Ordering::Relaxed);
+        };
+        // A pair can lower no vertex's distance once it is at least the largest of its
+        // vertices' distances so far, which only fall: skipping it where its boxes' gap
+        // says so leaves every minimum, and so the bounds, as they were.
+        let farthest = |vertices: &[u32]| {
+            vertices.iter().map(|&k| f32::from_bits(nearest[k as usize].load(Ordering::Relaxed))).fold(0.0, f32::max)
         };
         // Each vertex against the triangles around it.
         (0..x.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).for_each(|v| {
             let p = x[v as usize];
             let mut own = reach;
-            triangle_tree.query(&Aabb { min: p, max: p }.inflated(reach), |t| {
+            let point = Aabb::around([p]);
+            triangle_tree.query(&point.inflated(reach), |t| {
                 let triangle = triangles[t as usize];
-                if triangle.contains(&v) {
+                if triangle.contains(&v) || point.distance(&triangle_boxes[t as usize]) >= own.max(farthest(&triangle))
+                {
                     return;
                 }
                 let [a, b, c] = triangle.map(|k| x[k as usize]);
@@ -172,7 +180,10 @@ impl MotionBounds {
             let (pa, pb) = (x[a as usize], x[b as usize]);
             edge_tree.query_from(&edge_boxes[e as usize].inflated(reach), e + 1, |f| {
                 let [c, d] = edges[f as usize];
-                if c == a || c == b || d == a || d == b {
+                if [a, b].contains(&c)
+                    || [a, b].contains(&d)
+                    || edge_boxes[e as usize].distance(&edge_boxes[f as usize]) >= farthest(&[a, b, c, d])
+                {
                     return;
                 }
                 let (pc, pd) = (x[c as usize], x[d as usize]);
