@@ -237,7 +237,8 @@ const MAX_ADVANCES: u32 = 16;
 
 /// Moves the anchor towards where `delta` starts the particles, in steps within the
 /// bounds, measuring them again after each, while that brings the farthest particle
-/// closer by a quarter; `bounds` end measured at the anchor. A start outside them, which
+/// closer by a quarter (a move that would not is not made, which spares the measure
+/// after it); `bounds` end measured at the anchor. A start outside them, which
 /// contact stopped, is then pulled back onto them for particles the filters leave free; a
 /// constrained particle, whose `delta` the filter fixes in part, is left unbounded until
 /// the bounds are next measured. Returns the longest move the bounds were asked for.
@@ -247,24 +248,27 @@ const MAX_ADVANCES: u32 = 16;
 /// strip's speed stayed at the bound per step.
 fn advance_anchor(motion: &mut BoundedMotion<'_>, delta: &mut [Vec3], filter: &[Mat3], bounds: &mut [Bound]) -> f32 {
     let n = delta.len();
-    let mut wanted = f32::INFINITY;
+    let frame = motion.frame();
+    let mut wanted = (0..n)
+        .into_par_iter()
+        .with_min_len(super::PARALLEL_MIN_LEN)
+        .map(|i| frame.offset(i, delta[i]).length())
+        .reduce(|| 0.0, f32::max);
     for advance in 1..=MAX_ADVANCES {
-        let frame = motion.frame();
-        let farthest = (0..n)
-            .into_par_iter()
-            .with_min_len(super::PARALLEL_MIN_LEN)
-            .map(|i| frame.offset(i, delta[i]).length())
-            .reduce(|| 0.0, f32::max);
-        let slowing = farthest > 0.75 * wanted;
-        wanted = farthest;
         (motion.bound)(motion.anchor, wanted, bounds);
+        // How many particles the bounds stop short of the start, and how far from it the
+        // farthest would be left after a move.
         let frame = motion.frame();
-        let beyond = (0..n)
+        let (beyond, left) = (0..n)
             .into_par_iter()
             .with_min_len(super::PARALLEL_MIN_LEN)
-            .filter(|&i| reach(&bounds[i], frame.anchor[i], frame.offset(i, delta[i])) < 1.0)
-            .count();
-        if beyond == 0 || slowing || advance == MAX_ADVANCES {
+            .map(|i| {
+                let offset = frame.offset(i, delta[i]);
+                let allowed = reach(&bounds[i], frame.anchor[i], offset);
+                (u32::from(allowed < 1.0), offset.length() * (1.0 - allowed))
+            })
+            .reduce(|| (0, 0.0), |(a, x), (b, y)| (a + b, x.max(y)));
+        if beyond == 0 || left > 0.75 * wanted || advance == MAX_ADVANCES {
             break;
         }
         let (base, scale, delta) = (motion.base, motion.scale, &*delta);
@@ -272,6 +276,7 @@ fn advance_anchor(motion: &mut BoundedMotion<'_>, delta: &mut [Vec3], filter: &[
             let offset = position(base, scale, i, delta[i]) - *anchor;
             *anchor += offset * reach(&bounds[i], *anchor, offset);
         });
+        wanted = left;
     }
     let frame = motion.frame();
     delta.par_iter_mut().zip(bounds.par_iter_mut()).enumerate().with_min_len(super::PARALLEL_MIN_LEN).for_each(
