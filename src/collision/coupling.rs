@@ -80,7 +80,7 @@ impl BodyCoupling {
 }
 
 /// The largest change of a body's velocity at its touching particles [m/s] below which
-/// [`PropCoupling`] counts the body as balanced: 0.4 µm over a 1/240 s step.
+/// [`PropCoupling`] counts the body as balanced: 4.2 µm over a 1/240 s step.
 const BALANCE_TOLERANCE: f64 = 1e-3;
 
 /// A body's 6 velocity unknowns, `(v, L ω)`, and residuals in the same scaling.
