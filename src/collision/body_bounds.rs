@@ -19,6 +19,7 @@ use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::body_contact::{CAUGHT, ContactBody};
+use super::bvh::Aabb;
 use super::motion_bounds::Bound;
 use crate::solver::PARALLEL_MIN_LEN;
 
@@ -43,7 +44,7 @@ pub fn limit(bodies: &[ContactBody], x: &[Vec3], bounds: &mut [Bound]) {
             let thickness = body.thickness;
             let ball = |distance: f32| (distance - thickness).max(0.5 * distance);
             let aabb = body.shape.compute_aabb(pose);
-            let outside_box = (aabb.mins - p).max(p - aabb.maxs).max(Vec3::ZERO).length();
+            let outside_box = Aabb { min: aabb.mins, max: aabb.maxs }.distance(&Aabb::around([p]));
             if ball(outside_box) >= radius {
                 continue;
             }
