@@ -4,7 +4,9 @@
 //! Green strain `E = ½(FᵀF − I)`, axis 1 along the warp. The constants are stress resultants
 //! per unit strain [N/m] (modulus times thickness).
 
-use glam::{Mat2, Vec2, Vec3};
+use glam::{Mat2, Mat3, Vec2, Vec3};
+
+use super::spring::outer;
 
 /// Zheng's membrane constants [N/m].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -109,39 +111,46 @@ impl MembraneElement {
         self.spread(p).map(|g| -g)
     }
 
+    /// The gradients `γ_a` of the three linear shape functions in warp/weft coordinates
+    /// [1/m]: `F = Σ_a x_a γ_aᵀ`.
+    fn shape_gradients(&self) -> [Vec2; 3] {
+        let m = self.rest_inverse;
+        let (g1, g2) = (m.row(0), m.row(1));
+        [-(g1 + g2), g1, g2]
+    }
+
     /// The 3×3 blocks `∂f_a/∂x_b` [N/m], exact when `definite` is false. When `definite`,
     /// the stress in the geometric term is replaced by its positive part, which makes the
     /// blocks negative semi-definite (the material term already is for a positive 𝔻).
-    pub fn position_jacobian(&self, material: &MembraneMaterial, x: [Vec3; 3], definite: bool) -> [[glam::Mat3; 3]; 3] {
+    ///
+    /// In closed form, `∂f_a/∂x_b = −A ((γ_aᵀ S γ_b) I + F C_ab Fᵀ)`, where the material
+    /// term's 2×2 `C_ab` maps `Fᵀ δx` to the change of `S γ_a` that moving `x_b` by `δx`
+    /// causes through `𝔻`. Block `(b, a)` is block `(a, b)` transposed, bit for bit, so
+    /// the assembly carries only the blocks on and above the diagonal.
+    pub fn position_jacobian(&self, material: &MembraneMaterial, x: [Vec3; 3], definite: bool) -> [[Mat3; 3]; 3] {
         let f = self.deformation(x);
         let (e11, e22, e12) = f.green_strain();
         let (s11, s22, s12) = material.stress(e11, e22, e12);
         let (g11, g22, g12) = if definite { positive_part(s11, s22, s12) } else { (s11, s22, s12) };
-        let m = self.rest_inverse;
-        let mut blocks = [[glam::Mat3::ZERO; 3]; 3];
-        for b in 0..3 {
-            for k in 0..3 {
-                let mut unit = Vec3::ZERO;
-                unit[k] = 1.0;
-                let (de1, de2) = match b {
-                    0 => (-unit, -unit),
-                    1 => (unit, Vec3::ZERO),
-                    _ => (Vec3::ZERO, unit),
-                };
-                let dwarp = de1 * m.x_axis.x + de2 * m.x_axis.y;
-                let dweft = de1 * m.y_axis.x + de2 * m.y_axis.y;
-                let (d11, d22, d12) = material.stress(
-                    f.warp.dot(dwarp),
-                    f.weft.dot(dweft),
-                    0.5 * (dwarp.dot(f.weft) + f.warp.dot(dweft)),
-                );
-                let dp = [
-                    dwarp * g11 + dweft * g12 + f.warp * d11 + f.weft * d12,
-                    dwarp * g12 + dweft * g22 + f.warp * d12 + f.weft * d22,
+        let MembraneMaterial { d1, d2, d3, d4 } = *material;
+        // F C Fᵀ = c₀₀ w wᵀ + c₀₁ w fᵀ + c₁₀ f wᵀ + c₁₁ f fᵀ, w and f the warp's and weft's images.
+        let (ww, wf, ff) = (outer(f.warp, f.warp), outer(f.warp, f.weft), outer(f.weft, f.weft));
+        let fw = wf.transpose();
+        let gamma = self.shape_gradients();
+        let mut blocks = [[Mat3::ZERO; 3]; 3];
+        for a in 0..3 {
+            for b in a..3 {
+                let (p, q) = (gamma[a], gamma[b]);
+                let geometric = p.x * (g11 * q.x + g12 * q.y) + p.y * (g12 * q.x + g22 * q.y);
+                let c = [
+                    d1 * p.x * q.x + d4 * p.y * q.y,
+                    d3 * p.x * q.y + d4 * p.y * q.x,
+                    d4 * p.x * q.y + d3 * p.y * q.x,
+                    d4 * p.x * q.x + d2 * p.y * q.y,
                 ];
-                for (a, g) in self.spread(dp).into_iter().enumerate() {
-                    *blocks[a][b].col_mut(k) = -g;
-                }
+                let material_term = c[0] * ww + c[1] * wf + c[2] * fw + c[3] * ff;
+                blocks[a][b] = -self.rest_area * (Mat3::from_diagonal(Vec3::splat(geometric)) + material_term);
+                blocks[b][a] = blocks[a][b].transpose();
             }
         }
         blocks
