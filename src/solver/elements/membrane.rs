@@ -96,9 +96,10 @@ impl MembraneElement {
     /// Gradient of the energy for a first Piola–Kirchhoff stress with columns `p` (warp,
     /// weft), spread to the three vertices.
     fn spread(&self, p: [Vec3; 2]) -> [Vec3; 3] {
-        let m = self.rest_inverse;
-        let g1 = self.rest_area * (p[0] * m.x_axis.x + p[1] * m.y_axis.x);
-        let g2 = self.rest_area * (p[0] * m.x_axis.y + p[1] * m.y_axis.y);
+        let [_, gamma1, gamma2] = self.shape_gradients();
+        let spread = |gamma: Vec2| self.rest_area * (p[0] * gamma.x + p[1] * gamma.y);
+        let (g1, g2) = (spread(gamma1), spread(gamma2));
+        // The first vertex's share from the other two, as its shape gradient is theirs negated.
         [-(g1 + g2), g1, g2]
     }
 
