@@ -13,7 +13,7 @@ use selvedge::collision::intersection::IntersectionCounter;
 use selvedge::components::{BendingDesc, BendingLawDesc, ClothMaterial, ClothTopology, MembraneDesc};
 use selvedge::scene::parse_scene;
 use selvedge::solver::descent::{DescentSettings, DescentWorkspace, descend};
-use selvedge::solver::elements::{BlockMatrix, VelocityJacobian};
+use selvedge::solver::elements::{SymmetricBlockMatrix, VelocityJacobian};
 use selvedge::solver::forces::{Air, ClothDynamics, ForceModel, ForceScratch};
 use selvedge::solver::integrate::{Integrator, IntegratorWorkspace, MethodSettings, step};
 use selvedge::solver::probes::most_stretched_edge;
@@ -113,7 +113,7 @@ fn kernels(c: &mut Criterion) {
         group.bench_function(BenchmarkId::new("probes/self_intersections", &size), |b| {
             on_pool(b, || counter.count(black_box(&x), &cloth.triangles.indices));
         });
-        let (mut dfdx, mut dfdv) = (BlockMatrix::default(), VelocityJacobian::default());
+        let (mut dfdx, mut dfdv) = (SymmetricBlockMatrix::default(), VelocityJacobian::default());
         group.bench_function(BenchmarkId::new("derivatives", &size), |b| {
             on_pool(b, || model.assemble(black_box(&x), &v, 0.0, true, &mut scratch, &mut force, &mut dfdx, &mut dfdv));
         });
@@ -121,7 +121,7 @@ fn kernels(c: &mut Criterion) {
         model.assemble(&x, &v, 0.0, true, &mut scratch, &mut force, &mut dfdx, &mut dfdv);
         let h = 1.0 / 60.0f32;
         let pattern = &topology.pattern;
-        let mut system = BlockMatrix { blocks: dfdx.blocks.iter().map(|k| -h * h * *k).collect() };
+        let mut system = SymmetricBlockMatrix { blocks: dfdx.blocks.iter().map(|k| -h * h * *k).collect() };
         system.add_diagonal(pattern, |i| 1.0 / cloth.particles.inv_mass[i]);
         let rhs: Vec<Vec3> = force.iter().map(|f| h * *f).collect();
         let filter = vec![Mat3::IDENTITY; count];

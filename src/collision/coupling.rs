@@ -220,15 +220,14 @@ impl PropCoupling {
                 continue;
             };
             let i = ci.particle as usize;
-            for slot in system.pattern.slots(i) {
-                let j = system.pattern.columns[slot];
+            for (j, block) in system.matrix.row(system.pattern, i) {
                 let Ok(k) = constraints.binary_search_by_key(&j, |c| c.particle) else {
                     continue;
                 };
                 let Some(link_j) = self.links[k].filter(|l| l.body == b) else {
                     continue;
                 };
-                let block = directions(ci) * system.matrix.blocks[slot] * directions(&constraints[k]);
+                let block = directions(ci) * block * directions(&constraints[k]);
                 let (skew_i, skew_j) = (skew(link_i.lever), skew(link_j.lever));
                 t += block;
                 c -= block * skew_j;

@@ -88,7 +88,7 @@ pub struct ClothTopology {
     /// Which 3×3 blocks the derivatives ∂f/∂x and ∂f/∂v have.
     pub pattern: BlockPattern,
     /// Where each spring's local blocks go in the pattern, as positions within their rows
-    /// ([`BlockPattern::stencil_positions`]).
+    /// ([`BlockPattern::upper_positions`]).
     pub spring_positions: Vec<[[u16; 2]; 2]>,
     /// Where each bending face's local blocks go (and, through its `corners`, each of its
     /// hinges': the exact Jacobian's hinge blocks are among a face's).
@@ -140,9 +140,9 @@ impl ClothTopology {
                 &hinges.faces.iter().map(|f| f.hinges).collect::<Vec<_>>(),
             ),
             particle_membranes: Csr::from_corners(count, &membranes.indices),
-            spring_positions: springs.pairs.iter().map(|&p| pattern.stencil_positions(p)).collect(),
-            face_positions: hinges.faces.iter().map(|f| pattern.stencil_positions(f.vertices)).collect(),
-            membrane_positions: membranes.indices.iter().map(|&t| pattern.stencil_positions(t)).collect(),
+            spring_positions: springs.pairs.iter().map(|&p| pattern.upper_positions(p)).collect(),
+            face_positions: hinges.faces.iter().map(|f| pattern.upper_positions(f.vertices)).collect(),
+            membrane_positions: membranes.indices.iter().map(|&t| pattern.upper_positions(t)).collect(),
             colouring: Colouring::greedy(&pattern),
             hierarchy: Hierarchy::build(
                 &pattern,

@@ -19,7 +19,7 @@
 use glam::{Mat3, Vec3};
 
 use super::elements::spring::outer;
-use super::elements::{BlockMatrix, BlockPattern};
+use super::elements::{BlockPattern, SymmetricBlockMatrix};
 
 /// A pair of primitives as four vertices and weights: the pair's relative position (or
 /// velocity) is `Σ weights[k] x[vertices[k]]`, pointing from the second side to the first.
@@ -219,11 +219,16 @@ pub fn add_product(springs: &[ContactSpring], weights: Weights, blocks: Blocks, 
 }
 
 /// Adds the diagonal blocks of `a K + b C`, `w_k² (a k n nᵀ + b c (I − n nᵀ))`, to `matrix`.
-pub fn add_diagonal(springs: &[ContactSpring], weights: Weights, pattern: &BlockPattern, matrix: &mut BlockMatrix) {
+pub fn add_diagonal(
+    springs: &[ContactSpring],
+    weights: Weights,
+    pattern: &BlockPattern,
+    matrix: &mut SymmetricBlockMatrix,
+) {
     for s in springs {
         let block = s.block(weights);
         for k in 0..4 {
-            matrix.blocks[pattern.diagonal_slot(s.stencil.vertices[k] as usize)] +=
+            *matrix.diagonal_mut(pattern, s.stencil.vertices[k] as usize) +=
                 s.stencil.weights[k] * s.stencil.weights[k] * block;
         }
     }
@@ -304,7 +309,7 @@ mod tests {
         }
         // Diagonal blocks in a matrix plus the off-diagonal product give the whole.
         let pattern = BlockPattern::from_stencils(4, std::iter::empty());
-        let mut matrix = BlockMatrix::default();
+        let mut matrix = SymmetricBlockMatrix::default();
         matrix.reset(&pattern);
         add_diagonal(&[s], weights, &pattern, &mut matrix);
         let mut split = vec![Vec3::ZERO; 4];

@@ -32,7 +32,7 @@
 use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
-use super::elements::{BlockMatrix, BlockPattern};
+use super::elements::{BlockPattern, SymmetricBlockMatrix};
 use crate::collision::motion_bounds::Bound;
 
 /// Rows per parallel task in a colour: a row is a few hundred flops, and colours are a
@@ -316,7 +316,7 @@ fn reach(bound: &Bound, anchor: Vec3, offset: Vec3) -> f32 {
 pub fn descend(
     pattern: &BlockPattern,
     colouring: &Colouring,
-    system: &BlockMatrix,
+    system: &SymmetricBlockMatrix,
     rhs: &[Vec3],
     filter: &[Mat3],
     settings: &DescentSettings,
@@ -329,7 +329,7 @@ pub fn descend(
     ws.step.clear();
     ws.step.extend((0..n).map(|i| {
         let s = filter[i];
-        let diagonal = s * system.block(pattern, i as u32, i as u32) * s + (Mat3::IDENTITY - s);
+        let diagonal = s * system.diagonal(pattern, i) * s + (Mat3::IDENTITY - s);
         if diagonal.determinant().abs() > 0.0 { diagonal.inverse() * s } else { Mat3::ZERO }
     }));
     ws.previous.resize(n, Vec3::ZERO);
@@ -361,11 +361,7 @@ pub fn descend(
             let frame = motion.as_ref().map(BoundedMotion::frame);
             ws.update.par_iter_mut().zip(rows.par_iter()).with_min_len(ROWS_PER_TASK).for_each(|(update, &i)| {
                 let i = i as usize;
-                let mut product = Vec3::ZERO;
-                for k in pattern.slots(i) {
-                    product += system.blocks[k] * current[pattern.columns[k] as usize];
-                }
-                let r = filter[i] * (rhs[i] - product);
+                let r = filter[i] * (rhs[i] - system.row_product(pattern, i, current));
                 let (correction, r, cut) = match frame {
                     Some(f) => f.newton_step(i, current[i], step[i], r, &bounds[i], filter[i] == Mat3::IDENTITY),
                     None => (step[i] * r, r, false),
@@ -443,29 +439,29 @@ mod tests {
 
     /// A chain of `n` particles joined by springs of stiffness `k`, mass `m`, as the
     /// system `M + k L` of an implicit step, block-diagonal in the axes.
-    fn chain(n: usize, m: f32, k: f32) -> (BlockPattern, BlockMatrix) {
+    fn chain(n: usize, m: f32, k: f32) -> (BlockPattern, SymmetricBlockMatrix) {
         let pairs: Vec<[u32; 2]> = (0..n as u32 - 1).map(|i| [i, i + 1]).collect();
         let pattern = BlockPattern::from_stencils(n, pairs.iter().map(|p| &p[..]));
-        let mut system = BlockMatrix::default();
+        let mut system = SymmetricBlockMatrix::default();
         system.reset(&pattern);
         system.add_diagonal(&pattern, |_| m);
         let stiffness = Mat3::from_diagonal(Vec3::splat(k));
         for p in &pairs {
-            system.add_local(&pattern.stencil_slots(*p), &[[stiffness, -stiffness], [-stiffness, stiffness]]);
+            system.add_local(*p, &pattern.upper_slots(*p), &[[stiffness, -stiffness], [-stiffness, stiffness]]);
         }
         (pattern, system)
     }
 
     /// `n` particles of 1 g joined along `edges` by springs of 10 N/m, as the system
     /// `M + h² K` of an implicit step of `h` [s].
-    fn edge_springs(n: usize, edges: &[[u32; 2]], h: f32) -> (BlockPattern, BlockMatrix) {
+    fn edge_springs(n: usize, edges: &[[u32; 2]], h: f32) -> (BlockPattern, SymmetricBlockMatrix) {
         let pattern = BlockPattern::from_stencils(n, edges.iter().map(|e| &e[..]));
-        let mut system = BlockMatrix::default();
+        let mut system = SymmetricBlockMatrix::default();
         system.reset(&pattern);
         system.add_diagonal(&pattern, |_| 1e-3);
         let k = Mat3::from_diagonal(Vec3::splat(h * h * 10.0));
         for e in edges {
-            system.add_local(&pattern.stencil_slots(*e), &[[k, -k], [-k, k]]);
+            system.add_local(*e, &pattern.upper_slots(*e), &[[k, -k], [-k, k]]);
         }
         (pattern, system)
     }

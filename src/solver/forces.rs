@@ -7,7 +7,8 @@ use rayon::prelude::*;
 use super::PARALLEL_MIN_LEN;
 use super::contact_springs::ContactSpring;
 use super::descent::Colouring;
-use super::elements::{BlockMatrix, BlockPattern, NO_HINGE, SpringElement, VelocityJacobian};
+use super::elements::block::oriented;
+use super::elements::{BlockPattern, NO_HINGE, SpringElement, SymmetricBlockMatrix, VelocityJacobian};
 use super::implicit::LinearDynamics;
 use super::integrate::Dynamics;
 use super::multigrid::Hierarchy;
@@ -166,43 +167,32 @@ fn element_chunk(elements: usize) -> usize {
     (elements / ELEMENT_CHUNKS).clamp(MIN_ELEMENT_CHUNK, MAX_ELEMENT_CHUNK)
 }
 
-/// Which of an element's local blocks [`add_elements`] computes and carries.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum LocalBlocks {
-    /// All `N × N`.
-    All,
-    /// Those on and above the diagonal; each one below is the transpose of its mirror
-    /// above, bit for bit, and is added as that. A bending face carries 21 blocks instead
-    /// of 36 through the buffer.
-    Upper,
+/// The `(a, b)` pairs, `a ≤ b`, of an element's local blocks on and above its diagonal:
+/// those [`add_elements`] computes and carries (each one below is the transpose of its
+/// mirror, and the matrix stores one of the two). A bending face carries 21 blocks
+/// instead of 36 through the buffer.
+fn upper_pairs<const N: usize>() -> impl Iterator<Item = (usize, usize)> + Clone {
+    (0..N).flat_map(|a| (a..N).map(move |b| (a, b)))
 }
 
-impl LocalBlocks {
-    /// The `(a, b)` pairs of the blocks carried, in the order they are buffered.
-    fn pairs<const N: usize>(self) -> impl Iterator<Item = (usize, usize)> + Clone {
-        (0..N).flat_map(move |a| (if self == Self::Upper { a } else { 0 }..N).map(move |b| (a, b)))
-    }
-}
-
-/// Adds the `N × N` local blocks `local(e)` of each of the `elements` to `matrix` (over
-/// `pattern`) at the blocks of `stencil(e)` found by `positions(e)`: each chunk's blocks
-/// are computed in parallel, then added in element order while the next chunk is
-/// computed ([`pipelined`]), by two tasks that share the rows
-/// ([`BlockMatrix::add_by_halves`]), so the sums are the same on any number of threads
-/// and the additions overlap the element work. Added by one task, they held the bending
-/// faces' assembly to 1.27 times its one-thread speed on two threads. `carried` says which
-/// blocks go through the buffer.
+/// Adds the `N × N` local blocks `local(e)` of each of the `elements` (those on and above
+/// their diagonal, [`upper_pairs`]) to `matrix` (over `pattern`) at the storage of
+/// `stencil(e)` found by `positions(e)`: each chunk's blocks are computed in parallel,
+/// then added in element order while the next chunk is computed ([`pipelined`]), by two
+/// tasks that share the rows ([`SymmetricBlockMatrix::add_by_halves`]), so the sums are
+/// the same on any number of threads and the additions overlap the element work. Added by
+/// one task, they held the bending faces' assembly to 1.27 times its one-thread speed on
+/// two threads.
 fn add_elements<const N: usize>(
-    matrix: &mut BlockMatrix,
+    matrix: &mut SymmetricBlockMatrix,
     pattern: &BlockPattern,
     elements: usize,
     positions: impl Fn(usize) -> [[u16; N]; N] + Sync,
     stencil: impl Fn(usize) -> [u32; N] + Sync,
-    carried: LocalBlocks,
     buffer: &mut Vec<Mat3>,
     local: impl Fn(usize) -> [[Mat3; N]; N] + Sync,
 ) {
-    let (size, per_chunk) = (carried.pairs::<N>().count(), element_chunk(elements));
+    let (size, per_chunk) = (upper_pairs::<N>().count(), element_chunk(elements));
     let half = per_chunk.min(elements) * size;
     let compute = |chunk: usize, blocks: &mut [Mat3]| {
         let first = chunk * per_chunk;
@@ -210,7 +200,7 @@ fn add_elements<const N: usize>(
         blocks[..count * size].par_chunks_mut(size).with_min_len(PARALLEL_MIN_LEN / 8).enumerate().for_each(
             |(k, out)| {
                 let local = local(first + k);
-                for (out, (a, b)) in out.iter_mut().zip(carried.pairs::<N>()) {
+                for (out, (a, b)) in out.iter_mut().zip(upper_pairs::<N>()) {
                     *out = local[a][b];
                 }
             },
@@ -224,14 +214,11 @@ fn add_elements<const N: usize>(
         matrix.add_by_halves(pattern, split, |rows, target, first| {
             for (e, element_blocks) in range.clone().zip(blocks.chunks(size)) {
                 let particles = stencil(e);
-                let slots = pattern.slots_at(particles, &positions(e));
-                let ours = particles.map(|p| rows.contains(&(p as usize)));
-                for ((a, b), block) in carried.pairs::<N>().zip(element_blocks) {
-                    if ours[a] {
-                        target[slots[a][b] as usize - first] += *block;
-                    }
-                    if carried == LocalBlocks::Upper && a != b && ours[b] {
-                        target[slots[b][a] as usize - first] += block.transpose();
+                let slots = pattern.upper_slots_at(particles, &positions(e));
+                for ((a, b), block) in upper_pairs::<N>().zip(element_blocks) {
+                    let (p, q) = (particles[a], particles[b]);
+                    if rows.contains(&(p.min(q) as usize)) {
+                        target[slots[a][b] as usize - first] += oriented(*block, p, q);
                     }
                 }
             }
@@ -404,7 +391,10 @@ impl ForceModel<'_> {
     /// topology's pattern. With `definite`, each element gives the semi-definite variant of
     /// its stiffness that conjugate gradients need (for bending: the faces' Gauss–Newton
     /// blocks without the hinges' angle-curvature term). Wind is left out of the derivatives:
-    /// implicit solvers treat it explicitly.
+    /// implicit solvers treat it explicitly. Both derivatives are stored symmetric
+    /// ([`SymmetricBlockMatrix`]), so without `definite` ∂f/∂x is exact except for the
+    /// springs' damping's dependence on position, which is not symmetric and is left out
+    /// as in the definite variant ([`SpringElement::position_jacobian`] has it).
     pub fn assemble(
         &self,
         x: &[Vec3],
@@ -413,7 +403,7 @@ impl ForceModel<'_> {
         definite: bool,
         scratch: &mut ForceScratch,
         out: &mut [Vec3],
-        dfdx: &mut BlockMatrix,
+        dfdx: &mut SymmetricBlockMatrix,
         dfdv: &mut VelocityJacobian,
     ) {
         self.eval(x, v, t, scratch, out);
@@ -424,12 +414,13 @@ impl ForceModel<'_> {
         for (s, positions) in topology.spring_positions.iter().enumerate() {
             let pair = self.springs.pairs[s];
             let [i, j] = pair.map(|p| p as usize);
-            let (spring, slots) = (self.spring(s), pattern.slots_at(pair, positions));
-            let k = spring.position_jacobian(x[i], x[j], v[i], v[j], definite);
-            dfdx.add_local(&slots, &[[k, -k], [-k, k]]);
+            let (spring, slots) = (self.spring(s), pattern.upper_slots_at(pair, positions));
+            // At equal velocities: without the damping's dependence on position (see above).
+            let k = spring.position_jacobian(x[i], x[j], v[i], v[i], definite);
+            dfdx.add_local(pair, &slots, &[[k, -k], [-k, k]]);
             if spring.damping > 0.0 {
                 let d = spring.velocity_jacobian(x[i], x[j]);
-                dfdv.add_local(&slots, &[[d, -d], [-d, d]]);
+                dfdv.add_local(pair, &slots, &[[d, -d], [-d, d]]);
             }
         }
         let bending = self.hinges.view();
@@ -442,7 +433,6 @@ impl ForceModel<'_> {
             faces.len(),
             |f| face_positions[f],
             face_stencil,
-            LocalBlocks::Upper,
             local_blocks,
             |f| bending.face_jacobian(f, hinge_gradient, hinge_delta),
         );
@@ -454,33 +444,17 @@ impl ForceModel<'_> {
                 corners.map(|a| corners.map(|b| positions[usize::from(a)][usize::from(b)]))
             };
             let hinges = |h: usize| self.hinges.vertices[h];
-            add_elements(
-                dfdx,
-                pattern,
-                self.hinges.vertices.len(),
-                hinge_positions,
-                hinges,
-                LocalBlocks::All,
-                local_blocks,
-                |h| bending.hinge_curvature_jacobian(h, x, hinge_moment[h]),
-            );
+            add_elements(dfdx, pattern, self.hinges.vertices.len(), hinge_positions, hinges, local_blocks, |h| {
+                bending.hinge_curvature_jacobian(h, x, hinge_moment[h])
+            });
         }
         let material = &self.membranes.material;
         let triangles = |m: usize| self.membranes.indices[m];
         let membrane_positions = |m: usize| topology.membrane_positions[m];
-        add_elements(
-            dfdx,
-            pattern,
-            self.membranes.indices.len(),
-            membrane_positions,
-            triangles,
-            LocalBlocks::Upper,
-            local_blocks,
-            |m| {
-                let corners = triangles(m).map(|p| x[p as usize]);
-                self.membranes.elements[m].position_jacobian(material, corners, definite)
-            },
-        );
+        add_elements(dfdx, pattern, self.membranes.indices.len(), membrane_positions, triangles, local_blocks, |m| {
+            let corners = triangles(m).map(|p| x[p as usize]);
+            self.membranes.elements[m].position_jacobian(material, corners, definite)
+        });
         let rate = self.damping_rate();
         if rate > 0.0 {
             dfdv.add_diagonal(pattern, |i| -rate / self.inv_mass[i]);
@@ -580,7 +554,7 @@ impl LinearDynamics for ClothDynamics<'_> {
         v: &[Vec3],
         t: f32,
         force: &mut [Vec3],
-        dfdx: &mut BlockMatrix,
+        dfdx: &mut SymmetricBlockMatrix,
         dfdv: &mut VelocityJacobian,
     ) {
         self.model.assemble(x, v, t, true, self.scratch, force, dfdx, dfdv);
@@ -664,11 +638,14 @@ mod tests {
         let fixture = Fixture::new();
         let (topology, model) =
             (&fixture.topology, fixture.model(Air { drag: 0.7, area_damping: 0.1, ..Air::default() }, &[]));
-        let (x, v) = (&fixture.particles.position, &fixture.particles.velocity);
+        let x = &fixture.particles.position;
         let n = x.len();
+        // At rest, where the springs' damping does not depend on position: ∂f/∂x leaves
+        // that part out ([`ForceModel::assemble`]). ∂f/∂v does not depend on velocity.
+        let v = &vec![Vec3::ZERO; n];
         let mut scratch = ForceScratch::default();
         let (mut force, mut dfdx, mut dfdv) =
-            (vec![Vec3::ZERO; n], BlockMatrix::default(), VelocityJacobian::default());
+            (vec![Vec3::ZERO; n], SymmetricBlockMatrix::default(), VelocityJacobian::default());
         model.assemble(x, v, 0.0, false, &mut scratch, &mut force, &mut dfdx, &mut dfdv);
         let force_at = |x: &[Vec3], v: &[Vec3]| {
             let mut out = vec![Vec3::ZERO; n];

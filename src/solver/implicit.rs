@@ -25,7 +25,7 @@ use super::PARALLEL_MIN_LEN;
 use super::contact_springs::{self, Blocks, ContactSpring, Weights};
 use super::descent::{BoundedMotion, Colouring, DescentSettings, DescentWorkspace, descend};
 use super::elements::spring::outer;
-use super::elements::{BlockMatrix, BlockPattern, VelocityJacobian};
+use super::elements::{BlockPattern, SymmetricBlockMatrix, VelocityJacobian};
 use super::integrate::{Dynamics, StepReport};
 use super::multigrid::{Hierarchy, Multigrid};
 use crate::collision::body_bounds;
@@ -121,7 +121,7 @@ pub trait LinearDynamics: Dynamics + Sync {
         v: &[Vec3],
         t: f32,
         force: &mut [Vec3],
-        dfdx: &mut BlockMatrix,
+        dfdx: &mut SymmetricBlockMatrix,
         dfdv: &mut VelocityJacobian,
     );
 }
@@ -132,11 +132,11 @@ pub struct ImplicitWorkspace {
     force: Vec<Vec3>,
     start_force: Vec<Vec3>,
     /// ∂f/∂x and the system `A` share one storage, which moves from one to the other: a
-    /// matrix of the pattern is some 700 bytes a particle, and nothing reads ∂f/∂x once
+    /// matrix of the pattern is some 350 bytes a particle, and nothing reads ∂f/∂x once
     /// `A` is built from it, nor `A` once the step linearises again.
-    dfdx: BlockMatrix,
+    dfdx: SymmetricBlockMatrix,
     dfdv: VelocityJacobian,
-    system: BlockMatrix,
+    system: SymmetricBlockMatrix,
     rhs: Vec<Vec3>,
     dv: Vec<Vec3>,
     delta: Vec<Vec3>,
@@ -209,7 +209,7 @@ pub struct StepSystem<'a> {
     /// Which blocks exist.
     pub pattern: &'a BlockPattern,
     /// `A = (1 + hα) M − h ∂f/∂v − (hβ + h²θ²) ∂f/∂x`.
-    pub matrix: &'a BlockMatrix,
+    pub matrix: &'a SymmetricBlockMatrix,
 }
 
 /// Relative size of a Newton correction below which the step counts as converged.
@@ -478,7 +478,7 @@ fn springs_of<'a>(settings: &ImplicitSettings, dynamics: &'a impl LinearDynamics
 /// `out = A y`: the matrix, and the contact springs' off-diagonal blocks weighted as
 /// stiffness and damping are in `A`.
 fn multiply_system(
-    system: &BlockMatrix,
+    system: &SymmetricBlockMatrix,
     pattern: &BlockPattern,
     springs: &[ContactSpring],
     weights: Weights,
@@ -697,7 +697,7 @@ fn conjugate_gradient(
             .into_par_iter()
             .with_min_len(PARALLEL_MIN_LEN)
             .map(|i| {
-                let block = system.block(pattern, i as u32, i as u32);
+                let block = system.diagonal(pattern, i);
                 if block.determinant().abs() > 0.0 { block.inverse() } else { Mat3::IDENTITY }
             })
             .collect_into_vec(preconditioner),

@@ -48,7 +48,7 @@ use rayon::prelude::*;
 
 use super::PARALLEL_MIN_LEN;
 use super::elements::spring::{outer, skew};
-use super::elements::{BlockMatrix, BlockPattern};
+use super::elements::{BlockMatrix, BlockPattern, SymmetricBlockMatrix};
 use super::pipeline::pipelined;
 use crate::components::Csr;
 
@@ -266,7 +266,7 @@ fn aggregate(pattern: &BlockPattern) -> (Vec<u32>, usize) {
 /// A pattern of `rows` rows, row `i` the sorted distinct columns that `fill(i, row)`
 /// pushes.
 fn rows_of(rows: usize, mut fill: impl FnMut(usize, &mut Vec<u32>)) -> BlockPattern {
-    let mut pattern = BlockPattern { offsets: vec![0], columns: Vec::new() };
+    let mut pattern = BlockPattern { offsets: vec![0], ..BlockPattern::default() };
     let mut row = Vec::new();
     for i in 0..rows {
         row.clear();
@@ -615,11 +615,10 @@ fn fill_rows(
 /// (6.9, 7.9 and 13.3 a frame at 64², 128² and 256² against 7.6, 10.3 and 13.7 with the
 /// whole system, 30 frames); their Frobenius norms on the diagonal instead doubled them
 /// at 256², where the bending outweighs the mass a thousandfold out of the sheet's plane.
-fn lump(pattern: &BlockPattern, system: &BlockMatrix, fine: &BlockPattern, out: &mut BlockMatrix) {
+fn lump(pattern: &BlockPattern, system: &SymmetricBlockMatrix, fine: &BlockPattern, out: &mut BlockMatrix) {
     fill_rows(fine, 1, out, |i, columns, blocks| {
         let (mut at, mut moved) = (0, Mat3::ZERO);
-        for k in pattern.slots(i) {
-            let (column, block) = (pattern.columns[k], system.blocks[k]);
+        for (column, block) in system.row(pattern, i) {
             while at < columns.len() && columns[at] < column {
                 at += 1;
             }
@@ -967,7 +966,7 @@ impl Multigrid {
         &mut self,
         hierarchy: &Hierarchy,
         pattern: &BlockPattern,
-        system: &BlockMatrix,
+        system: &SymmetricBlockMatrix,
         filter: &[Mat3],
         positions: &[Vec3],
     ) {
@@ -1167,7 +1166,7 @@ mod tests {
     /// An `n × n` grid of unit spacing, each quad split along one diagonal, as the system
     /// `m I + Σ k d dᵀ` of an implicit step with springs of stiffness `k` along its edges
     /// (`d` the unit edge): stiff along the edges, soft across the sheet, like cloth.
-    fn sheet(n: u32, m: f32, k: f32) -> (BlockPattern, BlockMatrix) {
+    fn sheet(n: u32, m: f32, k: f32) -> (BlockPattern, SymmetricBlockMatrix) {
         let index = |i: u32, j: u32| i * n + j;
         let mut edges = Vec::new();
         for i in 0..n {
@@ -1184,14 +1183,14 @@ mod tests {
             }
         }
         let pattern = BlockPattern::from_stencils((n * n) as usize, edges.iter().map(|e| &e[..]));
-        let mut system = BlockMatrix::default();
+        let mut system = SymmetricBlockMatrix::default();
         system.reset(&pattern);
         system.add_diagonal(&pattern, |_| m);
         let position = |p: u32| Vec3::new((p % n) as f32, (p / n) as f32, 0.0);
         for e in &edges {
             let d = (position(e[1]) - position(e[0])).normalize();
             let block = k * outer(d, d);
-            system.add_local(&pattern.stencil_slots(*e), &[[block, -block], [-block, block]]);
+            system.add_local(*e, &pattern.upper_slots(*e), &[[block, -block], [-block, block]]);
         }
         (pattern, system)
     }
