@@ -125,7 +125,8 @@ impl ClothTopology {
                 .map(|p| &p[..])
                 .chain(hinges.faces.iter().map(|f| &f.vertices[..]))
                 .chain(membranes.indices.iter().map(|t| &t[..])),
-        );
+        )
+        .with_upper();
         let mut free_inv_mass = inv_mass.to_vec();
         for &p in pinned {
             free_inv_mass[p as usize] = 0.0;

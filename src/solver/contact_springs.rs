@@ -308,7 +308,7 @@ mod tests {
             assert!((product[k] - numeric).length() < 1e-3 * numeric.length().max(1.0), "{k}");
         }
         // Diagonal blocks in a matrix plus the off-diagonal product give the whole.
-        let pattern = BlockPattern::from_stencils(4, std::iter::empty());
+        let pattern = BlockPattern::from_stencils(4, std::iter::empty()).with_upper();
         let mut matrix = SymmetricBlockMatrix::default();
         matrix.reset(&pattern);
         add_diagonal(&[s], weights, &pattern, &mut matrix);

@@ -441,7 +441,7 @@ mod tests {
     /// system `M + k L` of an implicit step, block-diagonal in the axes.
     fn chain(n: usize, m: f32, k: f32) -> (BlockPattern, SymmetricBlockMatrix) {
         let pairs: Vec<[u32; 2]> = (0..n as u32 - 1).map(|i| [i, i + 1]).collect();
-        let pattern = BlockPattern::from_stencils(n, pairs.iter().map(|p| &p[..]));
+        let pattern = BlockPattern::from_stencils(n, pairs.iter().map(|p| &p[..])).with_upper();
         let mut system = SymmetricBlockMatrix::default();
         system.reset(&pattern);
         system.add_diagonal(&pattern, |_| m);
@@ -455,7 +455,7 @@ mod tests {
     /// `n` particles of 1 g joined along `edges` by springs of 10 N/m, as the system
     /// `M + h² K` of an implicit step of `h` [s].
     fn edge_springs(n: usize, edges: &[[u32; 2]], h: f32) -> (BlockPattern, SymmetricBlockMatrix) {
-        let pattern = BlockPattern::from_stencils(n, edges.iter().map(|e| &e[..]));
+        let pattern = BlockPattern::from_stencils(n, edges.iter().map(|e| &e[..])).with_upper();
         let mut system = SymmetricBlockMatrix::default();
         system.reset(&pattern);
         system.add_diagonal(&pattern, |_| 1e-3);

@@ -1182,7 +1182,7 @@ mod tests {
                 }
             }
         }
-        let pattern = BlockPattern::from_stencils((n * n) as usize, edges.iter().map(|e| &e[..]));
+        let pattern = BlockPattern::from_stencils((n * n) as usize, edges.iter().map(|e| &e[..])).with_upper();
         let mut system = SymmetricBlockMatrix::default();
         system.reset(&pattern);
         system.add_diagonal(&pattern, |_| m);

@@ -18,8 +18,8 @@ pub struct BlockPattern {
     /// Block column indices, sorted within each row.
     pub columns: Vec<u32>,
     /// Where each row's blocks on and above the diagonal begin in the storage of a
-    /// [`SymmetricBlockMatrix`], one more than there are rows. Empty for a pattern that is
-    /// not symmetric (the multigrid's prolongators and coarse levels).
+    /// [`SymmetricBlockMatrix`], one more than there are rows; empty unless laid out for
+    /// one ([`BlockPattern::with_upper`]).
     pub upper: Vec<u32>,
     /// Per block below the diagonal, in slot order, the index of its mirror above in that
     /// storage.
@@ -60,15 +60,14 @@ impl BlockPattern {
             columns.extend_from_slice(&row);
             offsets.push(columns.len() as u32);
         }
-        let mut pattern = Self { offsets, columns, ..Self::default() };
-        pattern.index_upper();
-        pattern
+        Self { offsets, columns, ..Self::default() }
     }
 
-    /// Lays out the storage of a [`SymmetricBlockMatrix`] over this (symmetric) pattern:
-    /// each row's blocks from the diagonal on, row after row, and the mirror of every
-    /// block below.
-    fn index_upper(&mut self) {
+    /// This (symmetric) pattern laid out for a [`SymmetricBlockMatrix`]: each row's
+    /// blocks from the diagonal on, row after row, and the mirror of every block below.
+    /// Only the patterns of such matrices need it (on the 256² hang scene the mirrors
+    /// are 2.3 MB).
+    pub fn with_upper(mut self) -> Self {
         let rows = self.rows();
         self.upper = Vec::with_capacity(rows + 1);
         self.upper.push(0);
@@ -76,16 +75,15 @@ impl BlockPattern {
             let above = self.row(i).len() - self.below(i);
             self.upper.push(self.upper[i] + above as u32);
         }
-        let this = &*self;
-        let mirrors = (0..rows)
-            .flat_map(|i| {
-                let below = &this.row(i)[..this.below(i)];
-                below.iter().map(move |&j| this.upper_index(j, i as u32).expect("the pattern is symmetric"))
-            })
-            .collect();
+        let mut mirrors = Vec::with_capacity(self.columns.len() - self.upper[rows] as usize);
+        for i in 0..rows {
+            let below = &self.row(i)[..self.below(i)];
+            mirrors.extend(below.iter().map(|&j| self.upper_index(j, i as u32).expect("the pattern is symmetric")));
+        }
         self.mirrors = mirrors;
         self.reach =
             (0..rows).map(|i| self.row(i).last().map_or(0, |&j| (j as usize).saturating_sub(i))).max().unwrap_or(0);
+        self
     }
 
     /// How many of row `i`'s columns are below the diagonal.
@@ -287,7 +285,8 @@ impl BlockMatrix {
 /// Rows a chunk of [`SymmetricBlockMatrix::multiply`] at least.
 const PRODUCT_CHUNK: usize = 64;
 
-/// A symmetric matrix of 3×3 blocks over a symmetric [`BlockPattern`], of which it
+/// A symmetric matrix of 3×3 blocks over a symmetric [`BlockPattern`] laid out for it
+/// ([`BlockPattern::with_upper`]), of which it
 /// stores the blocks on and above the diagonal, row after row
 /// ([`BlockPattern::upper`]); a block below is its mirror transposed. The cloth's
 /// ∂f/∂x, ∂f/∂v and implicit system are symmetric (conjugate gradients need it), and
@@ -312,7 +311,8 @@ impl SymmetricBlockMatrix {
     /// Zeroes the matrix and sizes it for `pattern`, in parallel: on the 256² hang scene
     /// the matrix is 24 MB, and zeroing it on one thread idled the other.
     pub fn reset(&mut self, pattern: &BlockPattern) {
-        self.blocks.resize(pattern.upper.last().map_or(0, |&n| n as usize), Mat3::ZERO);
+        let size = pattern.upper.last().expect("the pattern is laid out for a symmetric matrix (`with_upper`)");
+        self.blocks.resize(*size as usize, Mat3::ZERO);
         self.blocks.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).for_each(|block| *block = Mat3::ZERO);
     }
 
@@ -528,7 +528,7 @@ mod tests {
     /// particles in.
     #[test]
     fn a_symmetric_matrix_keeps_the_upper_blocks_and_mirrors_the_rest() {
-        let pattern = BlockPattern::from_stencils(3, [&[0u32, 1][..], &[1, 2][..]]);
+        let pattern = BlockPattern::from_stencils(3, [&[0u32, 1][..], &[1, 2][..]]).with_upper();
         assert_eq!(pattern.offsets, vec![0, 2, 5, 7]);
         assert_eq!(pattern.columns, vec![0, 1, 0, 1, 2, 1, 2]);
         assert_eq!(pattern.slot(0, 2), None);
@@ -564,7 +564,7 @@ mod tests {
         let irregular = |k: u32| ((k.wrapping_mul(2_654_435_761) >> 16) % 1000) as f32 / 500.0 - 1.0;
         for far in [3, PRODUCT_CHUNK as u32 + 9] {
             let stencils: Vec<[u32; 3]> = (0..n - far).map(|i| [i + 1, i, i + far]).collect();
-            let pattern = BlockPattern::from_stencils(n as usize, stencils.iter().map(|s| &s[..]));
+            let pattern = BlockPattern::from_stencils(n as usize, stencils.iter().map(|s| &s[..])).with_upper();
             assert_eq!(pattern.reach, far as usize);
             let mut m = SymmetricBlockMatrix::default();
             m.reset(&pattern);
@@ -600,7 +600,7 @@ mod tests {
     /// Either half sees its own rows' blocks at their slots, wherever the split falls.
     #[test]
     fn halves_add_into_their_own_rows_only() {
-        let pattern = BlockPattern::from_stencils(3, [&[0u32, 1][..], &[1, 2][..]]);
+        let pattern = BlockPattern::from_stencils(3, [&[0u32, 1][..], &[1, 2][..]]).with_upper();
         for split in 0..5 {
             let mut m = BlockMatrix::default();
             m.reset(&pattern);
@@ -638,7 +638,7 @@ mod tests {
     /// holding the same diagonal does.
     #[test]
     fn a_diagonal_velocity_jacobian_acts_as_the_full_one() {
-        let pattern = BlockPattern::from_stencils(3, [&[0u32, 1][..], &[1, 2][..]]);
+        let pattern = BlockPattern::from_stencils(3, [&[0u32, 1][..], &[1, 2][..]]).with_upper();
         let mut stiffness = SymmetricBlockMatrix::default();
         stiffness.reset(&pattern);
         stiffness.add_local(
