@@ -89,12 +89,12 @@ pub struct ClothTopology {
     pub pattern: BlockPattern,
     /// Where each spring's local blocks go in the pattern, as positions within their rows
     /// ([`BlockPattern::upper_positions`]).
-    pub spring_positions: Vec<[[u16; 2]; 2]>,
+    pub spring_positions: Vec<[u16; 3]>,
     /// Where each bending face's local blocks go (and, through its `corners`, each of its
     /// hinges': the exact Jacobian's hinge blocks are among a face's).
-    pub face_positions: Vec<[[u16; 6]; 6]>,
+    pub face_positions: Vec<[u16; 21]>,
     /// Where each membrane triangle's local blocks go.
-    pub membrane_positions: Vec<[[u16; 3]; 3]>,
+    pub membrane_positions: Vec<[u16; 6]>,
     /// The particles in groups that share no element, for block descent's parallel sweeps.
     pub colouring: Colouring,
     /// The particles grouped level by level, for the multigrid preconditioner.

@@ -447,7 +447,7 @@ mod tests {
         system.add_diagonal(&pattern, |_| m);
         let stiffness = Mat3::from_diagonal(Vec3::splat(k));
         for p in &pairs {
-            system.add_local(*p, &pattern.upper_slots(*p), &[[stiffness, -stiffness], [-stiffness, stiffness]]);
+            system.add_local(*p, &pattern.upper_slots::<2, 3>(*p), &[[stiffness, -stiffness], [-stiffness, stiffness]]);
         }
         (pattern, system)
     }
@@ -461,7 +461,7 @@ mod tests {
         system.add_diagonal(&pattern, |_| 1e-3);
         let k = Mat3::from_diagonal(Vec3::splat(h * h * 10.0));
         for e in edges {
-            system.add_local(*e, &pattern.upper_slots(*e), &[[k, -k], [-k, k]]);
+            system.add_local(*e, &pattern.upper_slots::<2, 3>(*e), &[[k, -k], [-k, k]]);
         }
         (pattern, system)
     }

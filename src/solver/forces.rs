@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use super::PARALLEL_MIN_LEN;
 use super::contact_springs::ContactSpring;
 use super::descent::Colouring;
-use super::elements::block::oriented;
+use super::elements::block::{oriented, upper_pair, upper_pairs};
 use super::elements::{BlockPattern, NO_HINGE, SpringElement, SymmetricBlockMatrix, VelocityJacobian};
 use super::implicit::LinearDynamics;
 use super::integrate::Dynamics;
@@ -167,14 +167,6 @@ fn element_chunk(elements: usize) -> usize {
     (elements / ELEMENT_CHUNKS).clamp(MIN_ELEMENT_CHUNK, MAX_ELEMENT_CHUNK)
 }
 
-/// The `(a, b)` pairs, `a ≤ b`, of an element's local blocks on and above its diagonal:
-/// those [`add_elements`] computes and carries (each one below is the transpose of its
-/// mirror, and the matrix stores one of the two). A bending face carries 21 blocks
-/// instead of 36 through the buffer.
-fn upper_pairs<const N: usize>() -> impl Iterator<Item = (usize, usize)> + Clone {
-    (0..N).flat_map(|a| (a..N).map(move |b| (a, b)))
-}
-
 /// Adds the `N × N` local blocks `local(e)` of each of the `elements` (those on and above
 /// their diagonal, [`upper_pairs`]) to `matrix` (over `pattern`) at the storage of
 /// `stencil(e)` found by `positions(e)`: each chunk's blocks are computed in parallel,
@@ -183,16 +175,16 @@ fn upper_pairs<const N: usize>() -> impl Iterator<Item = (usize, usize)> + Clone
 /// the same on any number of threads and the additions overlap the element work. Added by
 /// one task, they held the bending faces' assembly to 1.27 times its one-thread speed on
 /// two threads.
-fn add_elements<const N: usize>(
+fn add_elements<const N: usize, const M: usize>(
     matrix: &mut SymmetricBlockMatrix,
     pattern: &BlockPattern,
     elements: usize,
-    positions: impl Fn(usize) -> [[u16; N]; N] + Sync,
+    positions: impl Fn(usize) -> [u16; M] + Sync,
     stencil: impl Fn(usize) -> [u32; N] + Sync,
     buffer: &mut Vec<Mat3>,
     local: impl Fn(usize) -> [[Mat3; N]; N] + Sync,
 ) {
-    let (size, per_chunk) = (upper_pairs::<N>().count(), element_chunk(elements));
+    let (size, per_chunk) = (M, element_chunk(elements));
     let half = per_chunk.min(elements) * size;
     let compute = |chunk: usize, blocks: &mut [Mat3]| {
         let first = chunk * per_chunk;
@@ -215,10 +207,10 @@ fn add_elements<const N: usize>(
             for (e, element_blocks) in range.clone().zip(blocks.chunks(size)) {
                 let particles = stencil(e);
                 let slots = pattern.upper_slots_at(particles, &positions(e));
-                for ((a, b), block) in upper_pairs::<N>().zip(element_blocks) {
+                for (((a, b), block), slot) in upper_pairs::<N>().zip(element_blocks).zip(slots) {
                     let (p, q) = (particles[a], particles[b]);
                     if rows.contains(&(p.min(q) as usize)) {
-                        target[slots[a][b] as usize - first] += oriented(*block, p, q);
+                        target[slot as usize - first] += oriented(*block, p, q);
                     }
                 }
             }
@@ -441,7 +433,11 @@ impl ForceModel<'_> {
             let hinge_positions = |h: usize| {
                 let side = topology.hinge_faces.row(h)[0] as usize;
                 let (positions, corners) = (&face_positions[side / 3], faces[side / 3].corners[side % 3]);
-                corners.map(|a| corners.map(|b| positions[usize::from(a)][usize::from(b)]))
+                let mut pairs = upper_pairs::<4>();
+                std::array::from_fn::<u16, 10, _>(|_| {
+                    let (a, b) = pairs.next().expect("ten pairs");
+                    positions[upper_pair::<6>(usize::from(corners[a]), usize::from(corners[b]))]
+                })
             };
             let hinges = |h: usize| self.hinges.vertices[h];
             add_elements(dfdx, pattern, self.hinges.vertices.len(), hinge_positions, hinges, local_blocks, |h| {

@@ -1190,7 +1190,7 @@ mod tests {
         for e in &edges {
             let d = (position(e[1]) - position(e[0])).normalize();
             let block = k * outer(d, d);
-            system.add_local(*e, &pattern.upper_slots(*e), &[[block, -block], [-block, block]]);
+            system.add_local(*e, &pattern.upper_slots::<2, 3>(*e), &[[block, -block], [-block, block]]);
         }
         (pattern, system)
     }

@@ -29,6 +29,19 @@ pub struct BlockPattern {
     pub reach: usize,
 }
 
+/// The `(a, b)` pairs, `a ≤ b`, of an `N`-particle element's local blocks on and above
+/// its diagonal, row by row: those a [`SymmetricBlockMatrix`] takes (each one below is
+/// its mirror transposed).
+pub fn upper_pairs<const N: usize>() -> impl Iterator<Item = (usize, usize)> + Clone {
+    (0..N).flat_map(|a| (a..N).map(move |b| (a, b)))
+}
+
+/// The index of pair `(a, b)` or `(b, a)` among [`upper_pairs`].
+pub const fn upper_pair<const N: usize>(a: usize, b: usize) -> usize {
+    let (a, b) = if a <= b { (a, b) } else { (b, a) };
+    a * (2 * N + 1 - a) / 2 + (b - a)
+}
+
 /// Row `i` of a symmetric pattern in its two parts, columns ascending in each.
 pub struct SymmetricRow<'a> {
     /// The columns below the diagonal.
@@ -146,33 +159,40 @@ impl BlockPattern {
         self.columns[start..end].binary_search(&column).ok().map(|k| (start + k) as u32)
     }
 
-    /// Storage indices in a [`SymmetricBlockMatrix`] of all `N × N` blocks of a stencil,
-    /// row-major: where an element's local blocks go (`(a, b)` and `(b, a)` share one).
-    /// Panics if the stencil is not in the pattern.
-    pub fn upper_slots<const N: usize>(&self, stencil: [u32; N]) -> [[u32; N]; N] {
-        stencil.map(|p| stencil.map(|q| self.upper_index(p, q).expect("the stencil is part of the pattern")))
+    /// Storage indices in a [`SymmetricBlockMatrix`] of a stencil's blocks on and above
+    /// its diagonal, in [`upper_pairs`] order (`M = N (N + 1) / 2` of them): where an
+    /// element's local blocks go. Panics if the stencil is not in the pattern.
+    pub fn upper_slots<const N: usize, const M: usize>(&self, stencil: [u32; N]) -> [u32; M] {
+        const { assert!(M == N * (N + 1) / 2) };
+        let mut pairs = upper_pairs::<N>();
+        std::array::from_fn(|_| {
+            let (a, b) = pairs.next().expect("M pairs");
+            self.upper_index(stencil[a], stencil[b]).expect("the stencil is part of the pattern")
+        })
     }
 
-    /// Where the blocks of a stencil are stored in a [`SymmetricBlockMatrix`], relative to
-    /// the start of the upper row they are in: for `(a, b)`, the position of the later of
-    /// the two particles among the earlier one's columns from its diagonal on. Kept per
-    /// element instead of the storage indices, they take half the memory (a row holds a
-    /// few dozen blocks, not 65 536). Panics if the stencil is not in the pattern.
-    pub fn upper_positions<const N: usize>(&self, stencil: [u32; N]) -> [[u16; N]; N] {
-        let slots = self.upper_slots(stencil);
-        std::array::from_fn(|a| {
-            std::array::from_fn(|b| {
-                let row_start = self.upper[stencil[a].min(stencil[b]) as usize];
-                u16::try_from(slots[a][b] - row_start).expect("a particle shares elements with fewer than 65 536")
-            })
+    /// [`BlockPattern::upper_slots`] relative to the start of the upper row each block is
+    /// in: for `(a, b)`, the position of the later of the two particles among the earlier
+    /// one's columns from its diagonal on. Kept per element instead of the storage
+    /// indices, they take half the memory (a row holds a few dozen blocks, not 65 536),
+    /// and the pairs on and above the diagonal alone a bending face's 42 bytes, not 72.
+    pub fn upper_positions<const N: usize, const M: usize>(&self, stencil: [u32; N]) -> [u16; M] {
+        let slots: [u32; M] = self.upper_slots(stencil);
+        let mut pairs = upper_pairs::<N>();
+        slots.map(|slot| {
+            let (a, b) = pairs.next().expect("M pairs");
+            let row_start = self.upper[stencil[a].min(stencil[b]) as usize];
+            u16::try_from(slot - row_start).expect("a particle shares elements with fewer than 65 536")
         })
     }
 
     /// The storage indices of a stencil's blocks from its
     /// [`BlockPattern::upper_positions`].
-    pub fn upper_slots_at<const N: usize>(&self, stencil: [u32; N], positions: &[[u16; N]; N]) -> [[u32; N]; N] {
-        std::array::from_fn(|a| {
-            std::array::from_fn(|b| self.upper[stencil[a].min(stencil[b]) as usize] + u32::from(positions[a][b]))
+    pub fn upper_slots_at<const N: usize, const M: usize>(&self, stencil: [u32; N], positions: &[u16; M]) -> [u32; M] {
+        let mut pairs = upper_pairs::<N>();
+        positions.map(|position| {
+            let (a, b) = pairs.next().expect("M pairs");
+            self.upper[stencil[a].min(stencil[b]) as usize] + u32::from(position)
         })
     }
 
@@ -320,11 +340,14 @@ impl SymmetricBlockMatrix {
     /// above its diagonal (`a ≤ b`; the rest are their transposes), at their storage
     /// `slots` ([`BlockPattern::upper_slots_at`]).
     #[inline]
-    pub fn add_local<const N: usize>(&mut self, stencil: [u32; N], slots: &[[u32; N]; N], local: &[[Mat3; N]; N]) {
-        for a in 0..N {
-            for b in a..N {
-                self.blocks[slots[a][b] as usize] += oriented(local[a][b], stencil[a], stencil[b]);
-            }
+    pub fn add_local<const N: usize, const M: usize>(
+        &mut self,
+        stencil: [u32; N],
+        slots: &[u32; M],
+        local: &[[Mat3; N]; N],
+    ) {
+        for (&slot, (a, b)) in slots.iter().zip(upper_pairs::<N>()) {
+            self.blocks[slot as usize] += oriented(local[a][b], stencil[a], stencil[b]);
         }
     }
 
@@ -451,7 +474,12 @@ impl VelocityJacobian {
 
     /// Adds an element's local blocks as [`SymmetricBlockMatrix::add_local`] does. Panics
     /// unless reset `full`.
-    pub fn add_local<const N: usize>(&mut self, stencil: [u32; N], slots: &[[u32; N]; N], local: &[[Mat3; N]; N]) {
+    pub fn add_local<const N: usize, const M: usize>(
+        &mut self,
+        stencil: [u32; N],
+        slots: &[u32; M],
+        local: &[[Mat3; N]; N],
+    ) {
         assert!(self.full, "off-diagonal blocks need a full velocity Jacobian");
         self.matrix.add_local(stencil, slots, local);
     }
@@ -535,15 +563,23 @@ mod tests {
         // Stored: (0, 0) (0, 1) | (1, 1) (1, 2) | (2, 2); below, (1, 0) mirrors 1, (2, 1) 3.
         assert_eq!(pattern.upper, vec![0, 2, 4, 5]);
         assert_eq!(pattern.mirrors, vec![1, 3]);
-        assert_eq!(pattern.upper_slots([2, 1]), [[4, 3], [3, 2]]);
-        assert_eq!(pattern.upper_positions([2, 1]), [[0, 1], [1, 0]]);
-        assert_eq!(pattern.upper_slots_at([2, 1], &pattern.upper_positions([2, 1])), pattern.upper_slots([2, 1]));
+        // Pairs (0, 0), (0, 1), (1, 1) of the stencil [2, 1]: (2, 2), (2, 1), (1, 1).
+        assert_eq!(pattern.upper_slots([2, 1]), [4, 3, 2]);
+        assert_eq!(pattern.upper_positions([2, 1]), [0, 1, 0]);
+        assert_eq!(
+            pattern.upper_slots_at([2, 1], &pattern.upper_positions::<2, 3>([2, 1])),
+            pattern.upper_slots([2, 1])
+        );
+        let pairs: Vec<_> = upper_pairs::<4>().collect();
+        for (k, &(a, b)) in pairs.iter().enumerate() {
+            assert_eq!((upper_pair::<4>(a, b), upper_pair::<4>(b, a)), (k, k));
+        }
         let b = Mat3::from_cols_array(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]);
         let mut m = SymmetricBlockMatrix::default();
         m.reset(&pattern);
         m.add_diagonal(&pattern, |i| i as f32 + 1.0);
         // An element over particles 2 and 1 whose block (2, 1) is b.
-        m.add_local([2, 1], &pattern.upper_slots([2, 1]), &[[Mat3::ZERO, b], [b.transpose(), Mat3::ZERO]]);
+        m.add_local([2, 1], &pattern.upper_slots::<2, 3>([2, 1]), &[[Mat3::ZERO, b], [b.transpose(), Mat3::ZERO]]);
         assert_eq!(m.blocks.len(), 5);
         assert_eq!(m.block(&pattern, 2, 1), b);
         assert_eq!(m.block(&pattern, 1, 2), b.transpose());
@@ -574,7 +610,7 @@ mod tests {
                         Mat3::from_cols_array(&std::array::from_fn(|k| irregular((e * 81 + a * 27 + b * 9 + k) as u32)))
                     })
                 });
-                m.add_local(stencil, &pattern.upper_slots(stencil), &local);
+                m.add_local(stencil, &pattern.upper_slots::<3, 6>(stencil), &local);
             }
             let x: Vec<Vec3> =
                 (0..n).map(|i| Vec3::new(irregular(3 * i), irregular(3 * i + 1), irregular(3 * i + 2))).collect();
@@ -643,7 +679,7 @@ mod tests {
         stiffness.reset(&pattern);
         stiffness.add_local(
             [0, 1],
-            &pattern.upper_slots([0, 1]),
+            &pattern.upper_slots::<2, 3>([0, 1]),
             &[[Mat3::IDENTITY, -Mat3::IDENTITY], [-Mat3::IDENTITY, Mat3::IDENTITY]],
         );
         let [mut diagonal, mut full] = [false, true].map(|full| {
