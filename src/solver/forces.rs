@@ -383,10 +383,8 @@ impl ForceModel<'_> {
     /// topology's pattern. With `definite`, each element gives the semi-definite variant of
     /// its stiffness that conjugate gradients need (for bending: the faces' Gauss–Newton
     /// blocks without the hinges' angle-curvature term). Wind is left out of the derivatives:
-    /// implicit solvers treat it explicitly. Both derivatives are stored symmetric
-    /// ([`SymmetricBlockMatrix`]), so without `definite` ∂f/∂x is exact except for the
-    /// springs' damping's dependence on position, which is not symmetric and is left out
-    /// as in the definite variant ([`SpringElement::position_jacobian`] has it).
+    /// implicit solvers treat it explicitly, and so is the springs' damping's dependence on
+    /// position, which is not symmetric ([`SpringElement::position_jacobian`]).
     pub fn assemble(
         &self,
         x: &[Vec3],
@@ -407,8 +405,7 @@ impl ForceModel<'_> {
             let pair = self.springs.pairs[s];
             let [i, j] = pair.map(|p| p as usize);
             let (spring, slots) = (self.spring(s), pattern.upper_slots_at(pair, positions));
-            // At equal velocities: without the damping's dependence on position (see above).
-            let k = spring.position_jacobian(x[i], x[j], v[i], v[i], definite);
+            let k = spring.position_jacobian(x[i], x[j], definite);
             dfdx.add_local(pair, &slots, &[[k, -k], [-k, k]]);
             if spring.damping > 0.0 {
                 let d = spring.velocity_jacobian(x[i], x[j]);

@@ -34,12 +34,14 @@ impl SpringElement {
         -(self.stiffness * (length - self.rest) + self.damping * (vi - vj).dot(n)) * n
     }
 
-    /// `∂f_i/∂x_i` [N/m]; the local blocks are `[[K, −K], [−K, K]]`. Exact when `definite`
-    /// is false: the elastic term plus the position derivative of the damping term (which
-    /// is not symmetric). When `definite`, the transverse elastic term is clamped at zero
-    /// under compression and the damping term dropped (Choi & Ko), so that `−K` is
-    /// symmetric positive semi-definite, as conjugate gradients need.
-    pub fn position_jacobian(&self, xi: Vec3, xj: Vec3, vi: Vec3, vj: Vec3, definite: bool) -> Mat3 {
+    /// `∂f_i/∂x_i` [N/m] of the elastic force; the local blocks are `[[K, −K], [−K, K]]`.
+    /// Exact unless `definite`; then the transverse term is clamped at zero under
+    /// compression (Choi & Ko), so that `−K` is positive semi-definite, as conjugate
+    /// gradients need. The damping force's dependence on position, `k_d` times the
+    /// relative velocity turned with the spring, is left out: it is not symmetric, and the
+    /// derivatives are stored symmetric (`SymmetricBlockMatrix`); it vanishes where the
+    /// two ends move alike.
+    pub fn position_jacobian(&self, xi: Vec3, xj: Vec3, definite: bool) -> Mat3 {
         let d = xi - xj;
         let length = d.length();
         if length <= f32::EPSILON * self.rest {
@@ -47,16 +49,9 @@ impl SpringElement {
         }
         let n = d / length;
         let nn = outer(n, n);
-        let transverse = Mat3::IDENTITY - nn;
         let ratio = 1.0 - self.rest / length;
         let ratio = if definite { ratio.max(0.0) } else { ratio };
-        let elastic = -self.stiffness * (nn + ratio * transverse);
-        if definite || self.damping == 0.0 {
-            return elastic;
-        }
-        let u = vi - vj;
-        let damping = -(self.damping / length) * (outer(n, transverse * u) + u.dot(n) * transverse);
-        elastic + damping
+        -self.stiffness * (nn + ratio * (Mat3::IDENTITY - nn))
     }
 
     /// `∂f_i/∂v_i` [N·s/m] = `−k_d d̂ d̂ᵀ`; the local blocks are `[[D, −D], [−D, D]]`.
@@ -92,14 +87,16 @@ mod tests {
         assert_close(SPRING.force(xi, xj, Vec3::ZERO, Vec3::ZERO), numeric, 1e-3, "elastic force");
     }
 
+    /// ∂f/∂x where both ends move alike, so that only the elastic force depends on
+    /// position; ∂f/∂v, which does not depend on velocity, where they do not.
     #[test]
     fn jacobians_match_differences_of_the_force_stretched_and_compressed() {
         let (vi, vj) = (Vec3::new(0.5, -1.0, 0.2), Vec3::new(-0.3, 0.4, 0.1));
         for xj in [Vec3::new(-0.4, 0.1, 0.2), Vec3::new(0.1, -0.1, 0.7)] {
             let xi = Vec3::new(0.3, -0.2, 0.9);
-            let k = SPRING.position_jacobian(xi, xj, vi, vj, false);
+            let k = SPRING.position_jacobian(xi, xj, false);
             for axis in 0..3 {
-                let numeric = central_difference(|x| SPRING.force(x, xj, vi, vj)[axis], xi);
+                let numeric = central_difference(|x| SPRING.force(x, xj, vi, vi)[axis], xi);
                 assert_close(k.row(axis), numeric, 1e-3, "∂f/∂x");
                 let numeric = central_difference(|v| SPRING.force(xi, xj, v, vj)[axis], vi);
                 assert_close(SPRING.velocity_jacobian(xi, xj).row(axis), numeric, 1e-3, "∂f/∂v");
@@ -110,11 +107,11 @@ mod tests {
     #[test]
     fn the_definite_jacobian_has_no_positive_eigenvalue_under_compression() {
         let (xi, xj) = (Vec3::new(0.3, 0.0, 0.0), Vec3::ZERO);
-        let k = SPRING.position_jacobian(xi, xj, Vec3::ZERO, Vec3::ZERO, true);
+        let k = SPRING.position_jacobian(xi, xj, true);
         for direction in [Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE.normalize()] {
             assert!(direction.dot(k * direction) <= 1e-6);
         }
-        let exact = SPRING.position_jacobian(xi, xj, Vec3::ZERO, Vec3::ZERO, false);
+        let exact = SPRING.position_jacobian(xi, xj, false);
         assert!(Vec3::Y.dot(exact * Vec3::Y) > 0.0, "the exact one is indefinite there");
     }
 }
