@@ -220,19 +220,19 @@ impl PropCoupling {
                 continue;
             };
             let i = ci.particle as usize;
-            for (j, block) in system.matrix.row(system.pattern, i) {
+            system.matrix.for_row(system.pattern, i, |j, block| {
                 let Ok(k) = constraints.binary_search_by_key(&j, |c| c.particle) else {
-                    continue;
+                    return;
                 };
                 let Some(link_j) = self.links[k].filter(|l| l.body == b) else {
-                    continue;
+                    return;
                 };
                 let block = directions(ci) * block * directions(&constraints[k]);
                 let (skew_i, skew_j) = (skew(link_i.lever), skew(link_j.lever));
                 t += block;
                 c -= block * skew_j;
                 r -= skew_i * block * skew_j;
-            }
+            });
         }
         let inv_mass = Mat3::from_diagonal(body.start.inv_mass);
         let inv_inertia = body.start.inv_inertia;

@@ -618,7 +618,7 @@ fn fill_rows(
 fn lump(pattern: &BlockPattern, system: &SymmetricBlockMatrix, fine: &BlockPattern, out: &mut BlockMatrix) {
     fill_rows(fine, 1, out, |i, columns, blocks| {
         let (mut at, mut moved) = (0, Mat3::ZERO);
-        for (column, block) in system.row(pattern, i) {
+        system.for_row(pattern, i, |column, block| {
             while at < columns.len() && columns[at] < column {
                 at += 1;
             }
@@ -626,7 +626,7 @@ fn lump(pattern: &BlockPattern, system: &SymmetricBlockMatrix, fine: &BlockPatte
                 true => blocks[at] = block,
                 false => moved += lumped(block),
             }
-        }
+        });
         let diagonal = columns.binary_search(&(i as u32)).expect("every row has its diagonal");
         blocks[diagonal] += moved;
     });
