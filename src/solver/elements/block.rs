@@ -306,9 +306,9 @@ impl BlockMatrix {
 const PRODUCT_CHUNK: usize = 64;
 
 /// A symmetric matrix of 3×3 blocks over a symmetric [`BlockPattern`] laid out for it
-/// ([`BlockPattern::with_upper`]), of which it
-/// stores the blocks on and above the diagonal, row after row
-/// ([`BlockPattern::upper`]); a block below is its mirror transposed. The cloth's
+/// ([`BlockPattern::with_upper`]), of which it stores the blocks on and above the
+/// diagonal, row after row ([`BlockPattern::upper`]); a block below is its mirror
+/// transposed. The cloth's
 /// ∂f/∂x, ∂f/∂v and implicit system are symmetric (conjugate gradients need it), and
 /// stored in full the mirrors cost the largest scenes half their matrix traffic in every
 /// product and some 300 bytes a particle (on the 256² hang scene the process peaked at
@@ -384,8 +384,8 @@ impl SymmetricBlockMatrix {
     #[inline]
     pub fn row_product(&self, pattern: &BlockPattern, i: usize, x: &[Vec3]) -> Vec3 {
         let row = pattern.symmetric_row(i);
-        // `Σ Bᵀ x` as three sums of the columns' products by `x`, added across once: a
-        // dot product per block and component took the product 40 % longer.
+        // `Σ Bᵀ x` as three sums of the columns' products by `x`, added across once a row
+        // instead of a dot product per block and component.
         let mut below = Mat3::ZERO;
         for (&j, &mirror) in row.below.iter().zip(row.mirrors) {
             let (block, x) = (self.blocks[mirror as usize], x[j as usize]);
