@@ -167,8 +167,8 @@ fn element_chunk(elements: usize) -> usize {
     (elements / ELEMENT_CHUNKS).clamp(MIN_ELEMENT_CHUNK, MAX_ELEMENT_CHUNK)
 }
 
-/// Adds the `N × N` local blocks `local(e)` of each of the `elements` (those on and above
-/// their diagonal, [`upper_pairs`]) to `matrix` (over `pattern`) at the storage of
+/// Adds the local blocks `local(e)` of each of the `elements` (the `M` of its `N × N` on
+/// and above their diagonal, in [`upper_pairs`] order) to `matrix` (over `pattern`) at the storage of
 /// `stencil(e)` found by `positions(e)`: each chunk's blocks are computed in parallel,
 /// then added in element order while the next chunk is computed ([`pipelined`]), by two
 /// tasks that share the rows ([`SymmetricBlockMatrix::add_by_halves`]), so the sums are
@@ -182,21 +182,18 @@ fn add_elements<const N: usize, const M: usize>(
     positions: impl Fn(usize) -> [u16; M] + Sync,
     stencil: impl Fn(usize) -> [u32; N] + Sync,
     buffer: &mut Vec<Mat3>,
-    local: impl Fn(usize) -> [[Mat3; N]; N] + Sync,
+    local: impl Fn(usize) -> [Mat3; M] + Sync,
 ) {
     let (size, per_chunk) = (M, element_chunk(elements));
     let half = per_chunk.min(elements) * size;
     let compute = |chunk: usize, blocks: &mut [Mat3]| {
         let first = chunk * per_chunk;
         let count = per_chunk.min(elements - first);
-        blocks[..count * size].par_chunks_mut(size).with_min_len(PARALLEL_MIN_LEN / 8).enumerate().for_each(
-            |(k, out)| {
-                let local = local(first + k);
-                for (out, (a, b)) in out.iter_mut().zip(upper_pairs::<N>()) {
-                    *out = local[a][b];
-                }
-            },
-        );
+        blocks[..count * size]
+            .par_chunks_mut(size)
+            .with_min_len(PARALLEL_MIN_LEN / 8)
+            .enumerate()
+            .for_each(|(k, out)| out.copy_from_slice(&local(first + k)));
     };
     pipelined(elements.div_ceil(per_chunk), buffer, half, compute, |chunk, blocks| {
         let range = chunk * per_chunk..elements.min((chunk + 1) * per_chunk);
@@ -438,7 +435,12 @@ impl ForceModel<'_> {
             };
             let hinges = |h: usize| self.hinges.vertices[h];
             add_elements(dfdx, pattern, self.hinges.vertices.len(), hinge_positions, hinges, local_blocks, |h| {
-                bending.hinge_curvature_jacobian(h, x, hinge_moment[h])
+                let blocks = bending.hinge_curvature_jacobian(h, x, hinge_moment[h]);
+                let mut pairs = upper_pairs::<4>();
+                std::array::from_fn::<_, 10, _>(|_| {
+                    let (a, b) = pairs.next().expect("ten pairs");
+                    blocks[a][b]
+                })
             });
         }
         let material = &self.membranes.material;

@@ -12,6 +12,7 @@
 use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
+use super::block::upper_pairs;
 use super::hinge::{dihedral_hessian, hinge_angle, hinge_gradient};
 use super::spring::outer;
 use crate::solver::PARALLEL_MIN_LEN;
@@ -170,8 +171,10 @@ impl BendingSurface<'_> {
     /// The Gauss–Newton blocks `−A ∇κᵀ W″ ∇κ` of face `f` over its (up to six) vertices
     /// [N/m], from the hinges' angles away from rest `delta` and their `gradients` (see
     /// [`BendingSurface::gradients`]; each hinge serves two faces, and the forces need them
-    /// too): negative semi-definite for any law with `W″ ≥ 0`.
-    pub fn face_jacobian(&self, f: usize, gradients: &[[Vec3; 4]], delta: &[f32]) -> [[Mat3; 6]; 6] {
+    /// too): negative semi-definite for any law with `W″ ≥ 0`. Those on and above the
+    /// diagonal, in [`upper_pairs`] order, are all the symmetric matrix takes; each one
+    /// below is its mirror transposed.
+    pub fn face_jacobian(&self, f: usize, gradients: &[[Vec3; 4]], delta: &[f32]) -> [Mat3; 21] {
         let face = &self.faces[f];
         let (_, _, tangent) = self.rigidity.density(self.law, face.curvature(delta));
         // ∇κ by vertex: column c of `gradient[a]` is ∂κ_c/∂x_a.
@@ -185,14 +188,11 @@ impl BendingSurface<'_> {
         // Block (a, b) is −A ∇ₐκ W″ ∇_bκᵀ, and block (b, a) its transpose.
         let weight = Mat3::from_diagonal(-face.area * tangent);
         let weighted = gradient.map(|g| g * weight);
-        let mut blocks = [[Mat3::ZERO; 6]; 6];
-        for a in 0..6 {
-            for b in a..6 {
-                blocks[a][b] = weighted[a] * gradient[b].transpose();
-                blocks[b][a] = blocks[a][b].transpose();
-            }
-        }
-        blocks
+        let mut pairs = upper_pairs::<6>();
+        std::array::from_fn(|_| {
+            let (a, b) = pairs.next().expect("21 pairs");
+            weighted[a] * gradient[b].transpose()
+        })
     }
 
     /// The curvature term `−M_h ∂²θ_h/∂x²` of hinge `h` [N/m], which with the faces'
@@ -207,7 +207,7 @@ mod tests {
     use super::*;
     use crate::builders::surface::build_bending;
     use crate::components::{BendingDesc, BendingLawDesc};
-    use crate::solver::elements::testing::{assert_close, central_difference};
+    use crate::solver::elements::testing::{assert_close, central_difference, full_blocks};
 
     /// A 3 × 3 grid folded and twisted a little, and its bending.
     fn surface(law: BendingLawDesc) -> (Vec<Vec3>, crate::components::BendingHinges) {
@@ -296,7 +296,7 @@ mod tests {
                         moments[face.hinges[k] as usize] += m;
                     }
                 }
-                let blocks = view.face_jacobian(f, &gradients, &delta);
+                let blocks: [[Mat3; 6]; 6] = full_blocks(&view.face_jacobian(f, &gradients, &delta));
                 let count = face.vertices.iter().collect::<std::collections::BTreeSet<_>>().len();
                 for a in 0..count {
                     for b in 0..count {

@@ -6,6 +6,7 @@
 
 use glam::{Mat2, Mat3, Vec2, Vec3};
 
+use super::block::upper_pairs;
 use super::spring::outer;
 
 /// Zheng's membrane constants [N/m].
@@ -126,9 +127,9 @@ impl MembraneElement {
     ///
     /// In closed form, `∂f_a/∂x_b = −A ((γ_aᵀ S γ_b) I + F C_ab Fᵀ)`, where the material
     /// term's 2×2 `C_ab` maps `Fᵀ δx` to the change of `S γ_a` that moving `x_b` by `δx`
-    /// causes through `𝔻`. Block `(b, a)` is block `(a, b)` transposed, bit for bit, so
-    /// the assembly carries only the blocks on and above the diagonal.
-    pub fn position_jacobian(&self, material: &MembraneMaterial, x: [Vec3; 3], definite: bool) -> [[Mat3; 3]; 3] {
+    /// causes through `𝔻`. Block `(b, a)` is block `(a, b)` transposed, so only the blocks
+    /// on and above the diagonal are formed, in [`upper_pairs`] order.
+    pub fn position_jacobian(&self, material: &MembraneMaterial, x: [Vec3; 3], definite: bool) -> [Mat3; 6] {
         let f = self.deformation(x);
         let (e11, e22, e12) = f.green_strain();
         let (s11, s22, s12) = material.stress(e11, e22, e12);
@@ -138,23 +139,20 @@ impl MembraneElement {
         let (ww, wf, ff) = (outer(f.warp, f.warp), outer(f.warp, f.weft), outer(f.weft, f.weft));
         let fw = wf.transpose();
         let gamma = self.shape_gradients();
-        let mut blocks = [[Mat3::ZERO; 3]; 3];
-        for a in 0..3 {
-            for b in a..3 {
-                let (p, q) = (gamma[a], gamma[b]);
-                let geometric = p.x * (g11 * q.x + g12 * q.y) + p.y * (g12 * q.x + g22 * q.y);
-                let c = [
-                    d1 * p.x * q.x + d4 * p.y * q.y,
-                    d3 * p.x * q.y + d4 * p.y * q.x,
-                    d4 * p.x * q.y + d3 * p.y * q.x,
-                    d4 * p.x * q.x + d2 * p.y * q.y,
-                ];
-                let material_term = c[0] * ww + c[1] * wf + c[2] * fw + c[3] * ff;
-                blocks[a][b] = -self.rest_area * (Mat3::from_diagonal(Vec3::splat(geometric)) + material_term);
-                blocks[b][a] = blocks[a][b].transpose();
-            }
-        }
-        blocks
+        let mut pairs = upper_pairs::<3>();
+        std::array::from_fn(|_| {
+            let (a, b) = pairs.next().expect("six pairs");
+            let (p, q) = (gamma[a], gamma[b]);
+            let geometric = p.x * (g11 * q.x + g12 * q.y) + p.y * (g12 * q.x + g22 * q.y);
+            let c = [
+                d1 * p.x * q.x + d4 * p.y * q.y,
+                d3 * p.x * q.y + d4 * p.y * q.x,
+                d4 * p.x * q.y + d3 * p.y * q.x,
+                d4 * p.x * q.x + d2 * p.y * q.y,
+            ];
+            let material_term = c[0] * ww + c[1] * wf + c[2] * fw + c[3] * ff;
+            -self.rest_area * (Mat3::from_diagonal(Vec3::splat(geometric)) + material_term)
+        })
     }
 }
 
@@ -183,7 +181,7 @@ fn positive_part(a: f32, b: f32, c: f32) -> (f32, f32, f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solver::elements::testing::{assert_close, central_difference};
+    use crate::solver::elements::testing::{assert_close, central_difference, full_blocks};
 
     const MATERIAL: MembraneMaterial = MembraneMaterial { d1: 300.0, d2: 120.0, d3: 40.0, d4: 60.0 };
 
@@ -236,7 +234,7 @@ mod tests {
     #[test]
     fn exact_jacobian_blocks_match_differences_of_the_forces() {
         let (e, x) = element();
-        let blocks = e.position_jacobian(&MATERIAL, x, false);
+        let blocks: [[Mat3; 3]; 3] = full_blocks(&e.position_jacobian(&MATERIAL, x, false));
         for a in 0..3 {
             for b in 0..3 {
                 for axis in 0..3 {
@@ -259,7 +257,7 @@ mod tests {
         let rest = [Vec3::ZERO, Vec3::new(0.1, 0.0, 0.0), Vec3::new(0.0, 0.1, 0.0)];
         let e = MembraneElement::from_rest(rest, Vec3::X).expect("a proper triangle");
         let squeezed = rest.map(|p| Vec3::new(0.8 * p.x, 1.05 * p.y, 0.01 * p.x));
-        let blocks = e.position_jacobian(&MATERIAL, squeezed, true);
+        let blocks: [[Mat3; 3]; 3] = full_blocks(&e.position_jacobian(&MATERIAL, squeezed, true));
         // Test random directions in the 9-dimensional space.
         let mut seed = 12345u32;
         let mut random = || {
