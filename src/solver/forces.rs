@@ -168,8 +168,8 @@ fn element_chunk(elements: usize) -> usize {
 }
 
 /// Adds the local blocks `local(e)` of each of the `elements` (the `M` of its `N × N` on
-/// and above their diagonal, in [`upper_pairs`] order) to `matrix` (over `pattern`) at the storage of
-/// `stencil(e)` found by `positions(e)`: each chunk's blocks are computed in parallel,
+/// and above the diagonal, in [`upper_pairs`] order) to `matrix` (over `pattern`) at the
+/// storage of `stencil(e)` found by `positions(e)`: each chunk's blocks are computed in parallel,
 /// then added in element order while the next chunk is computed ([`pipelined`]), by two
 /// tasks that share the rows ([`SymmetricBlockMatrix::add_by_halves`]), so the sums are
 /// the same on any number of threads and the additions overlap the element work. Added by
