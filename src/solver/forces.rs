@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use super::PARALLEL_MIN_LEN;
 use super::contact_springs::ContactSpring;
 use super::descent::Colouring;
-use super::elements::block::{oriented, upper_pair, upper_pairs};
+use super::elements::block::{oriented, upper_map, upper_pair, upper_pairs};
 use super::elements::{BlockPattern, NO_HINGE, SpringElement, SymmetricBlockMatrix, VelocityJacobian};
 use super::implicit::LinearDynamics;
 use super::integrate::Dynamics;
@@ -427,20 +427,14 @@ impl ForceModel<'_> {
             let hinge_positions = |h: usize| {
                 let side = topology.hinge_faces.row(h)[0] as usize;
                 let (positions, corners) = (&face_positions[side / 3], faces[side / 3].corners[side % 3]);
-                let mut pairs = upper_pairs::<4>();
-                std::array::from_fn::<u16, 10, _>(|_| {
-                    let (a, b) = pairs.next().expect("ten pairs");
+                upper_map::<4, 10, _>(|a, b| {
                     positions[upper_pair::<6>(usize::from(corners[a]), usize::from(corners[b]))]
                 })
             };
             let hinges = |h: usize| self.hinges.vertices[h];
             add_elements(dfdx, pattern, self.hinges.vertices.len(), hinge_positions, hinges, local_blocks, |h| {
                 let blocks = bending.hinge_curvature_jacobian(h, x, hinge_moment[h]);
-                let mut pairs = upper_pairs::<4>();
-                std::array::from_fn::<_, 10, _>(|_| {
-                    let (a, b) = pairs.next().expect("ten pairs");
-                    blocks[a][b]
-                })
+                upper_map::<4, 10, _>(|a, b| blocks[a][b])
             });
         }
         let material = &self.membranes.material;

@@ -12,7 +12,7 @@
 use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
-use super::block::upper_pairs;
+use super::block::upper_map;
 use super::hinge::{dihedral_hessian, hinge_angle, hinge_gradient};
 use super::spring::outer;
 use crate::solver::PARALLEL_MIN_LEN;
@@ -172,7 +172,7 @@ impl BendingSurface<'_> {
     /// [N/m], from the hinges' angles away from rest `delta` and their `gradients` (see
     /// [`BendingSurface::gradients`]; each hinge serves two faces, and the forces need them
     /// too): negative semi-definite for any law with `W″ ≥ 0`. Those on and above the
-    /// diagonal, in [`upper_pairs`] order, are all the symmetric matrix takes; each one
+    /// diagonal, in [`upper_pairs`](super::block::upper_pairs) order, are all the symmetric matrix takes; each one
     /// below is its mirror transposed.
     pub fn face_jacobian(&self, f: usize, gradients: &[[Vec3; 4]], delta: &[f32]) -> [Mat3; 21] {
         let face = &self.faces[f];
@@ -188,11 +188,7 @@ impl BendingSurface<'_> {
         // Block (a, b) is −A ∇ₐκ W″ ∇_bκᵀ, and block (b, a) its transpose.
         let weight = Mat3::from_diagonal(-face.area * tangent);
         let weighted = gradient.map(|g| g * weight);
-        let mut pairs = upper_pairs::<6>();
-        std::array::from_fn(|_| {
-            let (a, b) = pairs.next().expect("21 pairs");
-            weighted[a] * gradient[b].transpose()
-        })
+        upper_map::<6, 21, _>(|a, b| weighted[a] * gradient[b].transpose())
     }
 
     /// The curvature term `−M_h ∂²θ_h/∂x²` of hinge `h` [N/m], which with the faces'

@@ -36,6 +36,17 @@ pub fn upper_pairs<const N: usize>() -> impl Iterator<Item = (usize, usize)> + C
     (0..N).flat_map(|a| (a..N).map(move |b| (a, b)))
 }
 
+/// `[f(a, b)]` over the [`upper_pairs`] of an `N`-particle element, in their order: the
+/// `M = N (N + 1) / 2` values a symmetric matrix takes of an element's blocks.
+pub fn upper_map<const N: usize, const M: usize, T>(mut f: impl FnMut(usize, usize) -> T) -> [T; M] {
+    const { assert!(M == N * (N + 1) / 2) };
+    let mut pairs = upper_pairs::<N>();
+    std::array::from_fn(|_| {
+        let (a, b) = pairs.next().expect("M pairs");
+        f(a, b)
+    })
+}
+
 /// The index of pair `(a, b)` or `(b, a)` among [`upper_pairs`].
 pub const fn upper_pair<const N: usize>(a: usize, b: usize) -> usize {
     let (a, b) = if a <= b { (a, b) } else { (b, a) };
@@ -163,10 +174,7 @@ impl BlockPattern {
     /// its diagonal, in [`upper_pairs`] order (`M = N (N + 1) / 2` of them): where an
     /// element's local blocks go. Panics if the stencil is not in the pattern.
     pub fn upper_slots<const N: usize, const M: usize>(&self, stencil: [u32; N]) -> [u32; M] {
-        const { assert!(M == N * (N + 1) / 2) };
-        let mut pairs = upper_pairs::<N>();
-        std::array::from_fn(|_| {
-            let (a, b) = pairs.next().expect("M pairs");
+        upper_map::<N, M, _>(|a, b| {
             self.upper_index(stencil[a], stencil[b]).expect("the stencil is part of the pattern")
         })
     }
@@ -177,10 +185,8 @@ impl BlockPattern {
     /// indices, they take half the memory (a row holds a few dozen blocks, not 65 536),
     /// and the pairs on and above the diagonal alone a bending face's 42 bytes, not 72.
     pub fn upper_positions<const N: usize, const M: usize>(&self, stencil: [u32; N]) -> [u16; M] {
-        let slots: [u32; M] = self.upper_slots(stencil);
-        let mut pairs = upper_pairs::<N>();
-        slots.map(|slot| {
-            let (a, b) = pairs.next().expect("M pairs");
+        upper_map::<N, M, _>(|a, b| {
+            let slot = self.upper_index(stencil[a], stencil[b]).expect("the stencil is part of the pattern");
             let row_start = self.upper[stencil[a].min(stencil[b]) as usize];
             u16::try_from(slot - row_start).expect("a particle shares elements with fewer than 65 536")
         })

@@ -6,7 +6,7 @@
 
 use glam::{Mat2, Mat3, Vec2, Vec3};
 
-use super::block::upper_pairs;
+use super::block::upper_map;
 use super::spring::outer;
 
 /// Zheng's membrane constants [N/m].
@@ -128,7 +128,7 @@ impl MembraneElement {
     /// In closed form, `∂f_a/∂x_b = −A ((γ_aᵀ S γ_b) I + F C_ab Fᵀ)`, where the material
     /// term's 2×2 `C_ab` maps `Fᵀ δx` to the change of `S γ_a` that moving `x_b` by `δx`
     /// causes through `𝔻`. Block `(b, a)` is block `(a, b)` transposed, so only the blocks
-    /// on and above the diagonal are formed, in [`upper_pairs`] order.
+    /// on and above the diagonal are formed, in [`upper_pairs`](super::block::upper_pairs) order.
     pub fn position_jacobian(&self, material: &MembraneMaterial, x: [Vec3; 3], definite: bool) -> [Mat3; 6] {
         let f = self.deformation(x);
         let (e11, e22, e12) = f.green_strain();
@@ -139,9 +139,7 @@ impl MembraneElement {
         let (ww, wf, ff) = (outer(f.warp, f.warp), outer(f.warp, f.weft), outer(f.weft, f.weft));
         let fw = wf.transpose();
         let gamma = self.shape_gradients();
-        let mut pairs = upper_pairs::<3>();
-        std::array::from_fn(|_| {
-            let (a, b) = pairs.next().expect("six pairs");
+        upper_map::<3, 6, _>(|a, b| {
             let (p, q) = (gamma[a], gamma[b]);
             let geometric = p.x * (g11 * q.x + g12 * q.y) + p.y * (g12 * q.x + g22 * q.y);
             let c = [
