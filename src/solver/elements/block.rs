@@ -389,20 +389,8 @@ impl SymmetricBlockMatrix {
     /// Row `i` of the matrix times `x`: every block of the row in column order.
     #[inline]
     pub fn row_product(&self, pattern: &BlockPattern, i: usize, x: &[Vec3]) -> Vec3 {
-        let row = pattern.symmetric_row(i);
-        // `Σ Bᵀ x` as three sums of the columns' products by `x`, added across once a row
-        // instead of a dot product per block and component.
-        let mut below = Mat3::ZERO;
-        for (&j, &mirror) in row.below.iter().zip(row.mirrors) {
-            let (block, x) = (self.blocks[mirror as usize], x[j as usize]);
-            below.x_axis += block.x_axis * x;
-            below.y_axis += block.y_axis * x;
-            below.z_axis += block.z_axis * x;
-        }
-        let mut sum = Vec3::new(below.x_axis.element_sum(), below.y_axis.element_sum(), below.z_axis.element_sum());
-        for (&j, block) in row.above.iter().zip(&self.blocks[row.storage]) {
-            sum += *block * x[j as usize];
-        }
+        let mut sum = Vec3::ZERO;
+        self.for_row(pattern, i, |j, block| sum += block * x[j as usize]);
         sum
     }
 
