@@ -216,6 +216,18 @@ impl BlockPattern {
     ) {
         split_rows(&self.offsets, size, rows, blocks, &|i, blocks| group(i, self.row(i), blocks));
     }
+
+    /// Lets `group(i, row, values)` work on what is kept per block of a
+    /// [`SymmetricBlockMatrix`]'s storage (`values`, one per stored block) row by row,
+    /// given row `i`'s part from its diagonal on: halves of the rows in parallel, as
+    /// [`BlockPattern::fill_row_range`].
+    pub(crate) fn fill_upper_rows<T: Send>(
+        &self,
+        values: &mut [T],
+        group: &(impl Fn(usize, SymmetricRow<'_>, &mut [T]) + Sync),
+    ) {
+        split_rows(&self.upper, 1, 0..self.rows(), values, &|i, values| group(i, self.symmetric_row(i), values));
+    }
 }
 
 /// Lets `add(rows, blocks, first)` work on the rows below `split` and on the rest in two
@@ -235,15 +247,15 @@ fn add_by_halves(
 }
 
 /// Lets `group(i, blocks)` work on each group of `size` rows from row `i` within `rows`
-/// (whole groups), given their `blocks` in a storage whose rows begin at `offsets`
-/// (`blocks` being those of `rows`): halves of the rows in parallel, down to
-/// [`PARALLEL_MIN_LEN`] blocks.
-fn split_rows(
+/// (whole groups), given their `blocks` (or whatever is kept per block) in a storage whose
+/// rows begin at `offsets` (`blocks` being those of `rows`): halves of the rows in
+/// parallel, down to [`PARALLEL_MIN_LEN`] blocks.
+fn split_rows<T: Send>(
     offsets: &[u32],
     size: usize,
     rows: std::ops::Range<usize>,
-    blocks: &mut [Mat3],
-    group: &(impl Fn(usize, &mut [Mat3]) + Sync),
+    blocks: &mut [T],
+    group: &(impl Fn(usize, &mut [T]) + Sync),
 ) {
     let first = offsets[rows.start] as usize;
     if blocks.len() <= PARALLEL_MIN_LEN || rows.len() <= size {
@@ -390,20 +402,21 @@ impl SymmetricBlockMatrix {
     #[inline]
     pub fn row_product(&self, pattern: &BlockPattern, i: usize, x: &[Vec3]) -> Vec3 {
         let mut sum = Vec3::ZERO;
-        self.for_row(pattern, i, |j, block| sum += block * x[j as usize]);
+        self.for_row(pattern, i, |j, block, _| sum += block * x[j as usize]);
         sum
     }
 
-    /// Calls `visit(column, block)` for every block of row `i`, columns ascending: two
-    /// plain loops, which a chained iterator's test at every block made slower.
+    /// Calls `visit(column, block, slot)` for every block of row `i`, columns ascending,
+    /// `slot` being where the block or its mirror is stored: two plain loops, which a
+    /// chained iterator's test at every block made slower.
     #[inline]
-    pub fn for_row(&self, pattern: &BlockPattern, i: usize, mut visit: impl FnMut(u32, Mat3)) {
+    pub fn for_row(&self, pattern: &BlockPattern, i: usize, mut visit: impl FnMut(u32, Mat3, usize)) {
         let row = pattern.symmetric_row(i);
         for (&j, &mirror) in row.below.iter().zip(row.mirrors) {
-            visit(j, self.blocks[mirror as usize].transpose());
+            visit(j, self.blocks[mirror as usize].transpose(), mirror as usize);
         }
-        for (&j, block) in row.above.iter().zip(&self.blocks[row.storage]) {
-            visit(j, *block);
+        for ((&j, block), slot) in row.above.iter().zip(&self.blocks[row.storage.clone()]).zip(row.storage) {
+            visit(j, *block, slot);
         }
     }
 
@@ -585,7 +598,7 @@ mod tests {
         assert_eq!(m.block(&pattern, 1, 2), b.transpose());
         assert_eq!(m.block(&pattern, 0, 2), Mat3::ZERO);
         let mut row = Vec::new();
-        m.for_row(&pattern, 2, |j, block| row.push((j, block)));
+        m.for_row(&pattern, 2, |j, block, _| row.push((j, block)));
         assert_eq!(row, vec![(1, b), (2, 3.0 * Mat3::IDENTITY)]);
         let x = [Vec3::X, Vec3::Y, Vec3::new(1.0, -2.0, 0.5)];
         let mut out = vec![Vec3::ZERO; 3];
