@@ -623,7 +623,7 @@ fn fill_rows(
 /// A block and its mirror move the same shift onto their two diagonals, so each stored
 /// block's shift is found once, into `shifts` (one per stored block), before the rows are
 /// filled. Found for each side, they took `lump` 74 ms over the 120 frames of hang_64;
-/// found once, 44 ms, for 4 bytes a stored block (10 a particle of a regular sheet).
+/// found once, 44 ms, for 4 bytes a stored block (a regular sheet stores 10 a particle).
 fn lump(
     pattern: &BlockPattern,
     system: &SymmetricBlockMatrix,
