@@ -12,7 +12,7 @@ use crate::builders::tear::Cut;
 use crate::collision::self_contact::{ContactMesh, SelfContactReport, SelfContactSolver};
 use crate::solver::contact_springs::ContactSpring;
 use crate::solver::forces::Air;
-use crate::solver::integrate::{Integrator, MethodSettings};
+use crate::solver::integrate::{Integrator, MethodSettings, StageTimes};
 use crate::solver::probes::ClothProbe;
 
 /// How time advances: a frame is `substeps` steps of `dt`.
@@ -122,6 +122,8 @@ pub struct IntegratorStats {
     pub evaluations: u64,
     /// Conjugate-gradient iterations of the implicit methods.
     pub iterations: u64,
+    /// Where the implicit steps' time went.
+    pub stages: StageTimes,
 }
 
 /// A change to a cloth's structure at a given time.

@@ -105,12 +105,15 @@ pub fn integrate_cloths(
             )
             .map(|report| {
                 let total = result.unwrap_or_default();
+                let mut stages = total.stages;
+                stages += report.stages;
                 StepReport {
                     accepted: total.accepted + report.accepted,
                     rejected: total.rejected + report.rejected,
                     evaluations: total.evaluations + report.evaluations + u32::from(split > 0),
                     iterations: total.iterations + report.iterations,
                     max_error_ratio: total.max_error_ratio.max(report.max_error_ratio),
+                    stages,
                 }
             });
             if result.is_err() {
@@ -142,6 +145,7 @@ pub fn integrate_cloths(
                 stats.rejected += u64::from(report.rejected);
                 stats.evaluations += 1 + u64::from(report.evaluations);
                 stats.iterations += u64::from(report.iterations);
+                stats.stages += report.stages;
             }
             Err(error) => {
                 health.problem.get_or_insert(HealthProblem { cloth: cloth.name.clone(), problem: error.to_string() });

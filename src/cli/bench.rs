@@ -3,6 +3,7 @@
 //! self-intersections) and the peak memory.
 
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
 
@@ -10,6 +11,7 @@ use super::{EXIT_IO, Failure};
 use crate::Simulation;
 use crate::io::report::write_json;
 use crate::scene::load_scene;
+use crate::solver::integrate::StageTimes;
 
 /// The benchmark scenes, in the order they run; each is `scenes/bench/<name>.ron`.
 pub const BENCH_SCENES: [&str; 6] = ["hang_32", "hang_64", "hang_128", "hang_256", "sphere_64", "fold_64"];
@@ -46,6 +48,14 @@ pub struct BenchResult {
     /// Median wall-clock time of the timed frames' probes [ms]: the exact
     /// self-intersection count, the energies, the strain and the pin force.
     pub probe_ms_per_frame: f64,
+    /// Where the implicit steps' time went, means over the timed frames [ms]: forces,
+    /// derivatives and the system built from them ...
+    pub assembly_ms_per_frame: f64,
+    /// ... the preconditioner made ready for each system (the multigrid's levels) ...
+    pub preconditioner_ms_per_frame: f64,
+    /// ... and the linear solves' iterations. The rest of a frame is contact, the health
+    /// check and the render data (and, in the means, the frames' spread).
+    pub solve_ms_per_frame: f64,
     /// Simulated time over wall-clock time: 1 is real time.
     pub realtime_factor: f64,
     /// Particles × iterations per second of wall-clock time.
@@ -104,6 +114,7 @@ pub(super) fn bench(quick: bool, out: Option<PathBuf>, threads: Option<usize>, o
         print_row(&result);
         results.push(result);
     }
+    print_stages(&results);
     if let Some(out) = out {
         let report = BenchReport { quick, threads: rayon::current_num_threads(), scenes: results };
         write_json(&out, &report).map_err(|e| Failure::io(format!("cannot write {}", out.display()), e))?;
@@ -166,10 +177,11 @@ fn bench_scene(path: &Path, quick: bool) -> Result<BenchResult, Failure> {
     };
     let mut status = "completed".to_owned();
     let (mut times, mut probe_times) = (Vec::with_capacity(timed as usize), Vec::with_capacity(timed as usize));
-    let mut iterations_before = 0;
+    let (mut iterations_before, mut stages_before) = (0, StageTimes::default());
     for frame in 0..warm_up + timed {
         if frame == warm_up {
             iterations_before = iterations(&simulation);
+            stages_before = simulation.integrator_stats().stages;
         }
         if let Err(diverged) = simulation.step_frame() {
             status = diverged.to_string();
@@ -185,6 +197,10 @@ fn bench_scene(path: &Path, quick: bool) -> Result<BenchResult, Failure> {
     let timed_frames = times.len() as u32;
     let seconds = median(&mut times);
     let iterations_per_frame = (iterations(&simulation) - iterations_before) as f64 / f64::from(timed_frames.max(1));
+    let stages = simulation.integrator_stats().stages;
+    let per_frame = |after: Duration, before: Duration| {
+        1e3 * after.saturating_sub(before).as_secs_f64() / f64::from(timed_frames.max(1))
+    };
     let peak_memory_bytes = baseline.zip(memory("VmHWM:")).map(|(before, peak)| peak.saturating_sub(before));
     Ok(BenchResult {
         scene: file.scene.name.clone(),
@@ -197,6 +213,9 @@ fn bench_scene(path: &Path, quick: bool) -> Result<BenchResult, Failure> {
         timed_frames,
         ms_per_frame: 1e3 * seconds,
         probe_ms_per_frame: 1e3 * median(&mut probe_times),
+        assembly_ms_per_frame: per_frame(stages.assembly, stages_before.assembly),
+        preconditioner_ms_per_frame: per_frame(stages.preconditioner, stages_before.preconditioner),
+        solve_ms_per_frame: per_frame(stages.solve, stages_before.solve),
         realtime_factor: if seconds > 0.0 { 1.0 / (f64::from(file.scene.time.fps) * seconds) } else { 0.0 },
         particle_iterations_per_s: if seconds > 0.0 {
             counts.particles as f64 * iterations_per_frame / seconds
@@ -287,6 +306,24 @@ fn print_row(r: &BenchResult) {
         r.bytes_per_particle.map_or("-".to_owned(), |b| format!("{b:.0}")),
         if r.status == "completed" { String::new() } else { format!("  ({})", r.status) }
     );
+}
+
+/// Where each scene's frame time goes: the implicit steps' stages, and the rest.
+#[expect(clippy::print_stdout, reason = "the table is the command's output")]
+fn print_stages(results: &[BenchResult]) {
+    println!("\nwhere a frame's time goes [ms, means over the timed frames; rest: the median frame less the stages]");
+    println!("{:<10} {:>10} {:>15} {:>10} {:>10}", "scene", "assembly", "preconditioner", "solve", "rest");
+    for r in results {
+        let stages = r.assembly_ms_per_frame + r.preconditioner_ms_per_frame + r.solve_ms_per_frame;
+        println!(
+            "{:<10} {:>10.2} {:>15.2} {:>10.2} {:>10.2}",
+            r.scene,
+            r.assembly_ms_per_frame,
+            r.preconditioner_ms_per_frame,
+            r.solve_ms_per_frame,
+            r.ms_per_frame - stages
+        );
+    }
 }
 
 #[cfg(test)]

@@ -18,6 +18,8 @@
 //! leaves the undamped elastic motion without numerical damping. Pinned particles are
 //! filtered out of the solve (their Δv stays zero), as in Baraff & Witkin's modified PCG.
 
+use std::time::Instant;
+
 use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
@@ -26,7 +28,7 @@ use super::contact_springs::{self, Blocks, ContactSpring, Weights};
 use super::descent::{BoundedMotion, Colouring, DescentSettings, DescentWorkspace, descend};
 use super::elements::spring::outer;
 use super::elements::{BlockPattern, SymmetricBlockMatrix, VelocityJacobian};
-use super::integrate::{Dynamics, StepReport};
+use super::integrate::{Dynamics, StageTimes, StepReport};
 use super::multigrid::{Hierarchy, Multigrid};
 use crate::collision::body_bounds;
 use crate::collision::body_contact::ContactBody;
@@ -165,6 +167,8 @@ pub struct ImplicitWorkspace {
     motion_bounds: MotionBounds,
     /// The multigrid preconditioner's levels.
     multigrid: Multigrid,
+    /// Where the step's time has gone so far, for its report.
+    stages: StageTimes,
     /// Impulse each contact constraint applied in the last step [N·s], parallel to the
     /// constraints passed to [`implicit_step`].
     pub constraint_impulses: Vec<Vec3>,
@@ -265,6 +269,7 @@ pub fn implicit_step(
 
     // Linearised step about the start: F₀ = f₀ − αMv₀ + βKv₀, and
     // A Δv = h F₀ + h²θ K v₀.
+    let assembly = Instant::now();
     ws.dfdx = std::mem::take(&mut ws.system);
     dynamics.linearize(x, v, t, &mut ws.force, &mut ws.dfdx, &mut ws.dfdv);
     ws.dfdx.multiply(dynamics.pattern(), v, &mut ws.product);
@@ -276,6 +281,7 @@ pub fn implicit_step(
         ws.rhs[i] = h * ws.start_force[i] + h * h * theta * ws.product[i];
     }
     build_system(settings, h, dynamics, ws);
+    ws.stages.assembly += assembly.elapsed();
     // Where the springs' friction will be lagged from this solution, it need not be
     // accurate: only the last lagged solve is.
     let friction = contact_springs::have_friction(springs_of(settings, dynamics));
@@ -324,6 +330,7 @@ pub fn implicit_step(
 
     for _ in 1..settings.newton_iterations {
         end_of_step(x, v, &ws.dv, h, theta, &mut ws.x, &mut ws.v);
+        let assembly = Instant::now();
         ws.dfdx = std::mem::take(&mut ws.system);
         dynamics.linearize(&ws.x, &ws.v, t + h, &mut ws.force, &mut ws.dfdx, &mut ws.dfdv);
         let pattern = dynamics.pattern();
@@ -346,6 +353,7 @@ pub fn implicit_step(
                 h * ((1.0 - theta) * (ws.start_force[i] + damping_change) + theta * end_force) - mass * ws.dv[i];
         }
         build_system(settings, h, dynamics, ws);
+        ws.stages.assembly += assembly.elapsed();
         report.iterations += solve(dynamics, settings, Start::Zero, settings.cg_tolerance, x, h * theta, ws);
         add_constraint_impulses(dynamics.pattern(), springs_of(settings, dynamics), constraints, ws);
         for i in 0..n {
@@ -364,6 +372,7 @@ pub fn implicit_step(
             *v += *dv;
         },
     );
+    report.stages = std::mem::take(&mut ws.stages);
     report
 }
 
@@ -565,8 +574,25 @@ fn bounded(settings: &ImplicitSettings, dynamics: &impl LinearDynamics) -> bool 
 /// Solves `A delta = rhs` (the system and the contact springs) within the filters with the
 /// settings' linear solver, from `start`, to the relative residual `tolerance`. Block
 /// descent keeps each particle within its contact bounds, the particles at
-/// `ws.x + scale · delta` (`scale` = hθ [s]). Returns the iterations (or sweeps) taken.
+/// `ws.x + scale · delta` (`scale` = hθ [s]). Returns the iterations (or sweeps) taken,
+/// and adds the time they took to `ws.stages` (the preconditioner's apart).
 fn solve(
+    dynamics: &impl LinearDynamics,
+    settings: &ImplicitSettings,
+    start: Start,
+    tolerance: f32,
+    x: &[Vec3],
+    scale: f32,
+    ws: &mut ImplicitWorkspace,
+) -> u32 {
+    let (started, preconditioner) = (Instant::now(), ws.stages.preconditioner);
+    let iterations = run_linear_solver(dynamics, settings, start, tolerance, x, scale, ws);
+    ws.stages.solve += started.elapsed().saturating_sub(ws.stages.preconditioner - preconditioner);
+    iterations
+}
+
+/// [`solve`], but for its time.
+fn run_linear_solver(
     dynamics: &impl LinearDynamics,
     settings: &ImplicitSettings,
     start: Start,
@@ -688,9 +714,11 @@ fn conjugate_gradient(
         filter,
         multigrid,
         spring_weights,
+        stages,
         ..
     } = ws;
     let weights = *spring_weights;
+    let preparing = Instant::now();
     match hierarchy {
         Some(hierarchy) => multigrid.prepare(hierarchy, pattern, system, filter, x),
         None => (0..filter.len())
@@ -702,6 +730,7 @@ fn conjugate_gradient(
             })
             .collect_into_vec(preconditioner),
     }
+    stages.preconditioner += preparing.elapsed();
     let (filter, rhs) = (&*filter, &*rhs);
     // z = M⁻¹ r, returning r·z.
     let mut precondition = |r: &[Vec3], z: &mut [Vec3], partials: &mut Vec<f64>| {

@@ -7,6 +7,9 @@
 //! velocity Verlet are written out. The implicit methods ([`super::implicit`]) take the same
 //! system and linearise it.
 
+use std::ops::AddAssign;
+use std::time::Duration;
+
 use glam::Vec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -111,6 +114,31 @@ pub struct StepReport {
     pub max_error_ratio: f32,
     /// Conjugate-gradient iterations (implicit methods only).
     pub iterations: u32,
+    /// Where an implicit step's time went.
+    pub stages: StageTimes,
+}
+
+/// Wall-clock time the implicit methods spent in the stages of their steps, for
+/// `selvedge bench`'s account of where a frame's time goes. Nothing the steps compute
+/// depends on it.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StageTimes {
+    /// Forces and their derivatives at the linearisation point, and the system built from
+    /// them.
+    pub assembly: Duration,
+    /// The linear solver's preconditioner made ready for each system: the multigrid's
+    /// levels, or block Jacobi's inverse diagonal.
+    pub preconditioner: Duration,
+    /// The linear solves' iterations (conjugate gradients or block descent's sweeps).
+    pub solve: Duration,
+}
+
+impl AddAssign for StageTimes {
+    fn add_assign(&mut self, other: Self) {
+        self.assembly += other.assembly;
+        self.preconditioner += other.preconditioner;
+        self.solve += other.solve;
+    }
 }
 
 /// Why a step could not be completed.
