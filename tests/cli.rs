@@ -41,6 +41,9 @@ fn run_writes_frames_summary_and_probes() {
     for field in ["wall_time_s", "ms_per_frame", "probe_ms_per_frame", "springs", "triangles"] {
         assert!(summary[field].is_number(), "summary lacks {field}");
     }
+    for field in ["assembly_ms_per_frame", "preconditioner_ms_per_frame", "solve_ms_per_frame"] {
+        assert_eq!(summary[field].as_f64(), Some(0.0), "velocity Verlet takes no implicit step: {field}");
+    }
     let (frame_ms, probe_ms) = (summary["ms_per_frame"].as_f64(), summary["probe_ms_per_frame"].as_f64());
     assert!(probe_ms > Some(0.0) && probe_ms < frame_ms, "probes took {probe_ms:?} of {frame_ms:?} ms a frame");
     for probe in ["kinetic_energy_j", "potential_energy_j", "max_strain", "pin_force_n", "self_intersections"] {

@@ -59,6 +59,8 @@ pub(super) fn run(path: &Path, out: Option<PathBuf>, frames: Option<u32>, quiet:
     let clock = simulation.clock();
     let computed = table.rows.len() as u64;
     let stats = simulation.integrator_stats();
+    let per_frame =
+        |stage: std::time::Duration| if computed > 0 { 1e3 * stage.as_secs_f64() / computed as f64 } else { 0.0 };
     let summary = Summary {
         scene: scene.name.clone(),
         status: if divergence.is_some() { "diverged" } else { "completed" }.into(),
@@ -78,6 +80,9 @@ pub(super) fn run(path: &Path, out: Option<PathBuf>, frames: Option<u32>, quiet:
         force_evaluations: stats.evaluations,
         rejected_steps: stats.rejected,
         cg_iterations: stats.iterations,
+        assembly_ms_per_frame: per_frame(stats.stages.assembly),
+        preconditioner_ms_per_frame: per_frame(stats.stages.preconditioner),
+        solve_ms_per_frame: per_frame(stats.stages.solve),
         probes: simulation.probes().values.iter().map(|(k, v)| ((*k).to_owned(), *v)).collect(),
     };
     let summary_path = dir.join("summary.json");
@@ -126,6 +131,15 @@ fn print_summary(summary: &Summary, dir: &Path) {
         summary.substeps
     );
     println!("  {} particles, {} springs, {} triangles", summary.particles, summary.springs, summary.triangles);
+    if summary.cg_iterations > 0 {
+        println!(
+            "  implicit steps: {:.2} ms/frame assembling, {:.2} preparing the preconditioner, {:.2} solving ({} iterations)",
+            summary.assembly_ms_per_frame,
+            summary.preconditioner_ms_per_frame,
+            summary.solve_ms_per_frame,
+            summary.cg_iterations
+        );
+    }
     for (name, value) in &summary.probes {
         println!("  {name:<20} {value:.6}");
     }

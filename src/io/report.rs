@@ -47,6 +47,13 @@ pub struct Summary {
     pub rejected_steps: u64,
     /// Conjugate-gradient iterations of the implicit methods over the run.
     pub cg_iterations: u64,
+    /// Of `ms_per_frame`, the means the implicit steps spent [ms]: forces, derivatives and
+    /// the system built from them ...
+    pub assembly_ms_per_frame: f64,
+    /// ... the preconditioner made ready for each system ...
+    pub preconditioner_ms_per_frame: f64,
+    /// ... and the linear solves' iterations.
+    pub solve_ms_per_frame: f64,
     /// Probe values at the last frame, by name.
     pub probes: std::collections::BTreeMap<String, f64>,
 }
