@@ -218,11 +218,7 @@ fn bench_scene(path: &Path, quick: bool) -> Result<BenchResult, Failure> {
         assembly_ms_per_frame: per_frame(stages.assembly, stages_before.assembly),
         preconditioner_ms_per_frame: per_frame(stages.preconditioner, stages_before.preconditioner),
         solve_ms_per_frame: per_frame(stages.solve, stages_before.solve),
-        other_ms_per_frame: mean_ms
-            - per_frame(
-                stages.assembly + stages.preconditioner + stages.solve,
-                stages_before.assembly + stages_before.preconditioner + stages_before.solve,
-            ),
+        other_ms_per_frame: mean_ms - per_frame(stages.total(), stages_before.total()),
         realtime_factor: if seconds > 0.0 { 1.0 / (f64::from(file.scene.time.fps) * seconds) } else { 0.0 },
         particle_iterations_per_s: if seconds > 0.0 {
             counts.particles as f64 * iterations_per_frame / seconds

@@ -586,21 +586,6 @@ fn solve(
     ws: &mut ImplicitWorkspace,
 ) -> u32 {
     let (started, preconditioner) = (Instant::now(), ws.stages.preconditioner);
-    let iterations = run_linear_solver(dynamics, settings, start, tolerance, x, scale, ws);
-    ws.stages.solve += started.elapsed().saturating_sub(ws.stages.preconditioner - preconditioner);
-    iterations
-}
-
-/// [`solve`], but for its time.
-fn run_linear_solver(
-    dynamics: &impl LinearDynamics,
-    settings: &ImplicitSettings,
-    start: Start,
-    tolerance: f32,
-    x: &[Vec3],
-    scale: f32,
-    ws: &mut ImplicitWorkspace,
-) -> u32 {
     // Both solvers start from rest (Δv = 0: the inertial step), never from the last step's
     // Δv: what a few descent sweeps leave of that guess in the stiff modes is an explicit
     // step, and a hanging sheet diverged within ten frames. Within a step, a solve for
@@ -611,7 +596,7 @@ fn run_linear_solver(
         Start::Given => {}
     }
     let pattern = dynamics.pattern();
-    match settings.linear_solver {
+    let iterations = match settings.linear_solver {
         LinearSolver::ConjugateGradient => {
             conjugate_gradient(pattern, None, springs_of(settings, dynamics), settings, tolerance, x, ws)
         }
@@ -648,7 +633,9 @@ fn run_linear_solver(
                 &mut ws.descent,
             )
         }
-    }
+    };
+    ws.stages.solve += started.elapsed().saturating_sub(ws.stages.preconditioner - preconditioner);
+    iterations
 }
 
 /// Particles per task in the conjugate gradients' vector kernels. Fixed, so that the

@@ -133,6 +133,13 @@ pub struct StageTimes {
     pub solve: Duration,
 }
 
+impl StageTimes {
+    /// The three stages together.
+    pub fn total(&self) -> Duration {
+        self.assembly + self.preconditioner + self.solve
+    }
+}
+
 impl AddAssign for StageTimes {
     fn add_assign(&mut self, other: Self) {
         self.assembly += other.assembly;
