@@ -532,10 +532,16 @@ fn pair_vertices(mesh: &ContactMesh, pair: Pair) -> [u32; 4] {
     }
 }
 
+/// How many of a pair's [`pair_vertices`] are its first side's: the point, or the first
+/// edge's two.
+fn first_side(pair: Pair) -> usize {
+    if matches!(pair, Pair::PointTriangle(..)) { 1 } else { 2 }
+}
+
 /// Separation δ and friction μ of a pair: sums of the sides' half gaps, mean friction.
 fn pair_gap_and_friction(mesh: &ContactMesh, pair: Pair) -> (f32, f32) {
     let vertices = pair_vertices(mesh, pair);
-    let first_side = if matches!(pair, Pair::PointTriangle(..)) { 1 } else { 2 };
+    let first_side = first_side(pair);
     let side = |range: std::ops::Range<usize>| {
         let n = range.len() as f32;
         let (gap, mu) = range.fold((0.0, 0.0), |(g, m), k| {
@@ -589,7 +595,7 @@ fn may_touch(mesh: &ContactMesh, pair: Pair, x0: &[Vec3], x1: &[Vec3], margin: f
     let distance = closest(mesh, pair, x1).0.relative(x1).length();
     let vertices = pair_vertices(mesh, pair);
     let moves = vertices.map(|k| x0[k as usize] - x1[k as usize]);
-    let first_side = if matches!(pair, Pair::PointTriangle(..)) { 1 } else { 2 };
+    let first_side = first_side(pair);
     let apart = (0..first_side)
         .flat_map(|k| (first_side..4).map(move |j| (k, j)))
         .fold(0.0f32, |most, (k, j)| most.max(moves[k].distance(moves[j])));
