@@ -300,12 +300,6 @@ struct Level {
     frames: Vec<Mat3>,
     /// The filtered, smoothed prolongator `S P` from the next coarser level.
     prolongation: BlockMatrix,
-    /// Per node, the blocks of the filtered tentative prolongator `S P₀` in its own
-    /// aggregate's two columns (its only ones), formed once per prolongator rather than
-    /// once for each of the node's neighbours, which took half of the prolongator's time.
-    tentative: Vec<[Mat3; 2]>,
-    /// Two chunks of [`PRODUCT_ROWS`] rows of `A S P`, formed for the Galerkin product.
-    product: Vec<Mat3>,
     /// Estimate of the dominant mode of `D⁻¹ A`, kept for the next system.
     dominant: Vec<Vec3>,
     /// The residual after smoothing, then the prolongated coarse correction.
@@ -452,6 +446,12 @@ pub struct Multigrid {
     levels: Vec<Level>,
     /// Matrices of the levels below the finest (whose matrix is `fine`).
     matrices: Vec<BlockMatrix>,
+    /// Scratch of the levels' setup, one level at a time: per node, the rotation block of
+    /// the filtered tentative prolongator `S P₀` ([`Level::prolongator`]), then two chunks
+    /// of [`PRODUCT_ROWS`] rows of `A S P` ([`Level::galerkin`]). Kept per level, the two
+    /// were 190 bytes a particle of the 64² hang scene, and the translation blocks beside
+    /// the rotations (they are `S` itself) 36 more.
+    blocks: Vec<Mat3>,
     /// The coarsest level's direct solver.
     coarsest: CoarsestSolver,
     /// Whether the next system rebuilds the coarse levels: none built yet, the last solve
@@ -506,6 +506,16 @@ impl Rigid<'_> {
     /// The aggregate of `node`.
     fn aggregate(&self, node: usize) -> u32 {
         self.coarsening.aggregate[self.point(node)]
+    }
+
+    /// Block `(node, 2J)` of `S P₀` (`J` its aggregate), the filtered [`Rigid::block`] of
+    /// the aggregate's translation: `S` on the finest level, and below it the identity on
+    /// a pair's translation node and zero on its rotation node.
+    fn translation(&self, a: Operator, node: usize) -> Mat3 {
+        match self.coarsening.paired && node % 2 == 1 {
+            true => Mat3::ZERO,
+            false => a.filter(node),
+        }
     }
 
     /// Block `(node, column)` of `P₀`, `None` where the node is not in the column's
@@ -830,20 +840,24 @@ impl Level {
     /// a pair of nodes share their columns (both nodes of each neighbouring aggregate), and
     /// `D⁻¹` couples them, so a pair's rows are formed together. Row `i` of `A S P₀` is
     /// one walk of `A`'s row: a node `k` reaches the two columns of its own aggregate.
-    fn prolongator(&mut self, a: Operator, coarsening: &Coarsening, points: Points) {
-        let Level { inverse, weight, centres, frames, prolongation, tentative, .. } = self;
+    /// The rotation blocks of `S P₀` are formed first, into `rotations`, once per node
+    /// rather than once for each of the node's neighbours, which took half of the
+    /// prolongator's time; its translation blocks are `S` itself ([`Rigid::translation`]).
+    fn prolongator(&mut self, a: Operator, coarsening: &Coarsening, points: Points, rotations: &mut Vec<Mat3>) {
+        let Level { inverse, weight, centres, frames, prolongation, .. } = self;
         let (weight, rigid) = (*weight, Rigid { coarsening, points, centres, frames });
         let size = if coarsening.paired { 2 } else { 1 };
         (0..a.pattern.rows())
             .into_par_iter()
             .with_min_len(PARALLEL_MIN_LEN)
             .map(|node| {
-                let translation = 2 * rigid.aggregate(node);
-                [translation, translation + 1]
-                    .map(|column| rigid.block(node, column).map_or(Mat3::ZERO, |block| a.filter(node) * block))
+                let rotation = 2 * rigid.aggregate(node) + 1;
+                rigid.block(node, rotation).map_or(Mat3::ZERO, |block| a.filter(node) * block)
             })
-            .collect_into_vec(tentative);
-        let tentative = &*tentative;
+            .collect_into_vec(rotations);
+        let rotations = &*rotations;
+        // Node `i`'s blocks of `S P₀` in its aggregate's two columns, its only ones.
+        let tentative = |i: usize| [rigid.translation(a, i), rotations[i]];
         // Row `i` of `A S P₀` into `pushed`, the blocks of `columns`.
         let push = |i: usize, columns: &[u32], pushed: &mut [Mat3]| {
             pushed.fill(Mat3::ZERO);
@@ -851,8 +865,8 @@ impl Level {
                 let node = a.pattern.columns[k] as usize;
                 let translation = 2 * rigid.aggregate(node);
                 let Ok(at) = columns.binary_search(&translation) else { continue };
-                for (out, block) in pushed[at..at + 2].iter_mut().zip(&tentative[node]) {
-                    *out += a.matrix.blocks[k] * *block;
+                for (out, block) in pushed[at..at + 2].iter_mut().zip(tentative(node)) {
+                    *out += a.matrix.blocks[k] * block;
                 }
             }
         };
@@ -869,7 +883,7 @@ impl Level {
                         smoothed += *partner * pushed[1 - r];
                     }
                     let own = match coarse / 2 == rigid.aggregate(i) {
-                        true => tentative[i][coarse as usize % 2],
+                        true => tentative(i)[coarse as usize % 2],
                         false => Mat3::ZERO,
                     };
                     blocks[r * columns.len() + s] = own - weight * smoothed;
@@ -884,9 +898,9 @@ impl Level {
     /// the chunk before is added into the coarse matrix: fine row `r` adds
     /// `(S P)_rRᵀ (A S P)_r` to each coarse row `R` of its row of `S P`, rows in order, so
     /// each coarse block sums its terms in fine-row order on any number of threads.
-    fn galerkin(&mut self, a: Operator, coarsening: &Coarsening, out: &mut BlockMatrix) {
+    fn galerkin(&mut self, a: Operator, coarsening: &Coarsening, out: &mut BlockMatrix, buffer: &mut Vec<Mat3>) {
         let Coarsening { prolongation: p, product: ap, coarse, .. } = coarsening;
-        let (prolongation, buffer) = (&self.prolongation.blocks, &mut self.product);
+        let prolongation = &self.prolongation.blocks;
         let rows = ap.rows();
         let chunk_rows = |chunk: usize| chunk * PRODUCT_ROWS..rows.min((chunk + 1) * PRODUCT_ROWS);
         let chunks = rows.div_ceil(PRODUCT_ROWS);
@@ -1070,8 +1084,8 @@ impl Multigrid {
             };
             level.smoother(a, coarsening.paired);
             level.rigid_motions(coarsening, points);
-            level.prolongator(a, coarsening, points);
-            level.galerkin(a, coarsening, &mut below[0]);
+            level.prolongator(a, coarsening, points, &mut self.blocks);
+            level.galerkin(a, coarsening, &mut below[0], &mut self.blocks);
             let coarse = coarsening.coarse.rows();
             level.coarse_residual.resize(coarse, Vec3::ZERO);
             level.coarse_correction.resize(coarse, Vec3::ZERO);
