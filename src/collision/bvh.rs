@@ -113,25 +113,26 @@ impl Bvh {
     /// A tree over primitives with these boxes.
     pub fn build(boxes: &[Aabb]) -> Bvh {
         let mut tree = Bvh::default();
-        tree.rebuild(boxes);
+        tree.rebuild(boxes.len(), |p| boxes[p]);
         tree
     }
 
-    /// Builds the tree anew over `boxes`: each node splits its primitives at the median
-    /// of their centres along the longest side of the centres' box (centres only, so
-    /// coinciding primitives cannot make the split loop).
-    pub fn rebuild(&mut self, boxes: &[Aabb]) {
+    /// Builds the tree anew over `count` primitives, primitive `p` in box `boxes(p)`: each
+    /// node splits its primitives at the median of their centres along the longest side
+    /// of the centres' box (centres only, so coinciding primitives cannot make the split
+    /// loop).
+    pub fn rebuild(&mut self, count: usize, boxes: impl Fn(usize) -> Aabb) {
         self.nodes.clear();
         self.leaf_of.clear();
-        self.leaf_of.resize(boxes.len(), 0);
-        self.nodes.reserve_exact((2 * boxes.len()).saturating_sub(1));
+        self.leaf_of.resize(count, 0);
+        self.nodes.reserve_exact((2 * count).saturating_sub(1));
         let (mut order, mut centres) = (std::mem::take(&mut self.order), std::mem::take(&mut self.centres));
         order.clear();
-        order.extend(0..boxes.len() as u32);
+        order.extend(0..count as u32);
         centres.clear();
-        centres.extend(boxes.iter().map(Aabb::centre));
-        if !boxes.is_empty() {
-            self.split(&mut order, &centres, boxes);
+        centres.extend((0..count).map(|p| boxes(p).centre()));
+        if count > 0 {
+            self.split(&mut order, &centres, &boxes);
         }
         (self.order, self.centres) = (order, centres);
         self.built_cost = self.inner_cost();
@@ -139,10 +140,10 @@ impl Bvh {
     }
 
     /// Adds the subtree over `primitives` and returns its node; boxes are filled in.
-    fn split(&mut self, primitives: &mut [u32], centres: &[Vec3], boxes: &[Aabb]) -> u32 {
+    fn split(&mut self, primitives: &mut [u32], centres: &[Vec3], boxes: &impl Fn(usize) -> Aabb) -> u32 {
         let index = self.nodes.len() as u32;
         if let [primitive] = primitives {
-            self.nodes.push(Node { aabb: boxes[*primitive as usize], second: LEAF, last: *primitive });
+            self.nodes.push(Node { aabb: boxes(*primitive as usize), second: LEAF, last: *primitive });
             self.leaf_of[*primitive as usize] = index;
             return index;
         }
@@ -168,18 +169,20 @@ impl Bvh {
         index
     }
 
-    /// Puts the primitives' new boxes into the leaves and recomputes every inner box,
-    /// children before parents; rebuilds instead when the tree has become
+    /// Puts the primitives' new boxes `boxes(p)` into the leaves and recomputes every inner
+    /// box, children before parents; rebuilds instead when the tree has become
     /// [`REBUILD_RATIO`] times looser than when it was built, or when the number of
-    /// primitives changed. Returns whether it rebuilt.
-    pub fn refit(&mut self, boxes: &[Aabb]) -> bool {
-        if boxes.len() != self.leaf_of.len() {
-            self.rebuild(boxes);
+    /// primitives changed to `count`. Returns whether it rebuilt. The leaves are where the
+    /// boxes are kept ([`Bvh::aabb`]): an array of them beside the tree held every box
+    /// twice.
+    pub fn refit(&mut self, count: usize, boxes: impl Fn(usize) -> Aabb + Sync) -> bool {
+        if count != self.leaf_of.len() {
+            self.rebuild(count, boxes);
             return true;
         }
         self.nodes.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).for_each(|node| {
             if let Some(primitive) = node.primitive() {
-                node.aabb = boxes[primitive as usize];
+                node.aabb = boxes(primitive as usize);
             }
         });
         for index in (0..self.nodes.len()).rev() {
@@ -190,7 +193,7 @@ impl Bvh {
             }
         }
         if self.inner_cost() > REBUILD_RATIO * self.built_cost.max(f32::MIN_POSITIVE) {
-            self.rebuild(boxes);
+            self.rebuild(count, boxes);
             return true;
         }
         false
@@ -231,6 +234,11 @@ impl Bvh {
                 }
             }
         }
+    }
+
+    /// The box of `primitive`, as the last build or refit gave it.
+    pub fn aabb(&self, primitive: u32) -> Aabb {
+        self.nodes[self.leaf_of[primitive as usize] as usize].aabb
     }
 
     /// How many times the tree was built.
@@ -287,7 +295,7 @@ mod tests {
             assert_eq!(found(&tree, q), brute_force(&boxes, q));
         }
         let moved = cloud(500, 0.01);
-        assert!(!tree.refit(&moved), "a small motion refits without rebuilding");
+        assert!(!tree.refit(moved.len(), |p| moved[p]), "a small motion refits without rebuilding");
         for q in &queries {
             assert_eq!(found(&tree, q), brute_force(&moved, q));
         }
@@ -328,7 +336,7 @@ mod tests {
             .enumerate()
             .map(|(i, b)| cube(b.centre() * 0.1 + Vec3::splat(((i * 7919) % 300) as f32 / 30.0), 0.02))
             .collect();
-        assert!(tree.refit(&scrambled));
+        assert!(tree.refit(scrambled.len(), |p| scrambled[p]));
         assert_eq!(tree.builds(), 2);
         let q = cube(Vec3::splat(5.0), 0.5);
         assert_eq!(found(&tree, &q), brute_force(&scrambled, &q));

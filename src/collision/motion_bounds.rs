@@ -95,10 +95,9 @@ pub struct Surface<'a> {
 /// warm call allocates nothing. A clone starts with empty buffers.
 #[derive(Debug, Default)]
 pub struct MotionBounds {
+    /// The triangles' and the edges' boxes at the positions of the last call.
     triangle_tree: Bvh,
     edge_tree: Bvh,
-    triangle_boxes: Vec<Aabb>,
-    edge_boxes: Vec<Aabb>,
     /// Per vertex, the distance of the nearest pair it belongs to, as the bits of a
     /// non-negative `f32`, whose order is the numbers' order: an atomic minimum over them
     /// is exact and does not depend on the order the pairs are met in.
@@ -126,24 +125,14 @@ impl MotionBounds {
             edges.iter().map(|&[a, b]| x[a as usize].distance(x[b as usize])).sum::<f32>() / edges.len() as f32
         };
         let reach = (2.0 * wanted / GAMMA).clamp(0.125 * edge, edge);
-        triangles
-            .par_iter()
-            .with_min_len(PARALLEL_MIN_LEN)
-            .map(|t| Aabb::around(t.map(|k| x[k as usize])))
-            .collect_into_vec(&mut self.triangle_boxes);
-        edges
-            .par_iter()
-            .with_min_len(PARALLEL_MIN_LEN)
-            .map(|e| Aabb::around(e.map(|k| x[k as usize])))
-            .collect_into_vec(&mut self.edge_boxes);
-        self.triangle_tree.refit(&self.triangle_boxes);
-        self.edge_tree.refit(&self.edge_boxes);
+        self.triangle_tree.refit(triangles.len(), |t| Aabb::around(triangles[t].map(|k| x[k as usize])));
+        self.edge_tree.refit(edges.len(), |e| Aabb::around(edges[e].map(|k| x[k as usize])));
         self.nearest.resize_with(x.len(), AtomicU32::default);
         self.nearest
             .par_iter()
             .with_min_len(PARALLEL_MIN_LEN)
             .for_each(|d| d.store(reach.to_bits(), Ordering::Relaxed));
-        let Self { triangle_tree, edge_tree, triangle_boxes, edge_boxes, nearest } = &*self;
+        let Self { triangle_tree, edge_tree, nearest } = &*self;
         let lower = |k: u32, d: f32| {
             nearest[k as usize].fetch_min(d.to_bits(), Ordering::Relaxed);
         };
@@ -160,8 +149,7 @@ impl MotionBounds {
             let point = Aabb::around([p]);
             triangle_tree.query(&point.inflated(reach), |t| {
                 let triangle = triangles[t as usize];
-                if triangle.contains(&v) || point.distance(&triangle_boxes[t as usize]) >= own.max(farthest(&triangle))
-                {
+                if triangle.contains(&v) || point.distance(&triangle_tree.aabb(t)) >= own.max(farthest(&triangle)) {
                     return;
                 }
                 let [a, b, c] = triangle.map(|k| x[k as usize]);
@@ -178,11 +166,12 @@ impl MotionBounds {
         (0..edges.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).for_each(|e| {
             let [a, b] = edges[e as usize];
             let (pa, pb) = (x[a as usize], x[b as usize]);
-            edge_tree.query_from(&edge_boxes[e as usize].inflated(reach), e + 1, |f| {
+            let own = edge_tree.aabb(e);
+            edge_tree.query_from(&own.inflated(reach), e + 1, |f| {
                 let [c, d] = edges[f as usize];
                 if [a, b].contains(&c)
                     || [a, b].contains(&d)
-                    || edge_boxes[e as usize].distance(&edge_boxes[f as usize]) >= farthest(&[a, b, c, d])
+                    || own.distance(&edge_tree.aabb(f)) >= farthest(&[a, b, c, d])
                 {
                     return;
                 }

@@ -152,10 +152,10 @@ enum Pair {
 /// The trees and scratch space kept from step to step.
 #[derive(Debug, Default)]
 pub struct SelfContactSolver {
+    /// The triangles' and the edges' boxes swept over the step, grown by the largest
+    /// separation ([`SelfContactSolver::refit`]).
     triangle_tree: Bvh,
     edge_tree: Bvh,
-    triangle_boxes: Vec<Aabb>,
-    edge_boxes: Vec<Aabb>,
     /// Mean velocity of each vertex over the step, as the contacts change it.
     mean_velocity: Vec<Vec3>,
     /// The mean velocities the step came with.
@@ -341,7 +341,7 @@ impl SelfContactSolver {
         self.refit(mesh, x0, x1);
         self.listed_end.clear();
         self.listed_end.extend_from_slice(x1);
-        let (triangle_tree, edge_tree, edge_boxes) = (&self.triangle_tree, &self.edge_tree, &self.edge_boxes);
+        let (triangle_tree, edge_tree) = (&self.triangle_tree, &self.edge_tree);
         let exempt = &self.untangler.exempt;
         let free = |vertices: &[u32]| !vertices.iter().any(|&k| exempt[k as usize]);
         self.listed_with_exemptions = exempt.contains(&true);
@@ -353,7 +353,7 @@ impl SelfContactSolver {
                 let e = e as u32;
                 let [a, b] = mesh.edges[e as usize];
                 if free(&[a, b]) {
-                    edge_tree.query_from(&edge_boxes[e as usize], e + 1, |f| {
+                    edge_tree.query_from(&edge_tree.aabb(e), e + 1, |f| {
                         let [c, d] = mesh.edges[f as usize];
                         let pair = Pair::EdgeEdge(e, f);
                         if a != c
@@ -436,10 +436,8 @@ impl SelfContactSolver {
     fn refit(&mut self, mesh: &ContactMesh, x0: &[Vec3], x1: &[Vec3]) {
         let margin = self.margin(mesh);
         let swept = |vertices: &[u32]| swept_box(vertices, x0, x1).inflated(margin);
-        mesh.triangles.par_iter().map(|t| swept(t)).collect_into_vec(&mut self.triangle_boxes);
-        mesh.edges.par_iter().map(|e| swept(e)).collect_into_vec(&mut self.edge_boxes);
-        self.triangle_tree.refit(&self.triangle_boxes);
-        self.edge_tree.refit(&self.edge_boxes);
+        self.triangle_tree.refit(mesh.triangles.len(), |t| swept(&mesh.triangles[t]));
+        self.edge_tree.refit(mesh.edges.len(), |e| swept(&mesh.edges[e]));
     }
 
     /// Gives every zone of two or more vertices one rigid motion for the step: the
