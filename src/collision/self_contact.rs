@@ -149,20 +149,31 @@ enum Pair {
     EdgeEdge(u32, u32),
 }
 
+/// Levels below the edge tree's root at which its pairs with itself are split into
+/// independent parts: about 2¹⁰ subtrees, each with itself and with the few whose boxes
+/// meet it, enough parts to share among the threads.
+const EDGE_ROOT_DEPTH: u32 = 10;
+
+/// The largest separation of a pair of `mesh`.
+fn largest_gap(mesh: &ContactMesh) -> f32 {
+    2.0 * mesh.half_gap.iter().fold(0.0f32, |m, g| m.max(*g))
+}
+
 /// The trees' margin in separations. A wider margin keeps a candidate list for more
 /// steps (it serves while no end point has moved half the margin) but lists more pairs,
-/// each measured at every step. Listing is the costly part (a tree query per vertex and
-/// per edge, 5 to 7 ms on sphere_64 and fold_64): over sphere_64's first 90 frames one
-/// separation listed 592 times and took 3.2 s, two 377 times and 2.5 s (508 pairs a
-/// step against 264), four 240 times and 4.9 s (1 984 pairs); over fold_64's first 60
-/// frames 5.0, 4.8 and 6.3 s. The frames are the same, to the bit, whatever the margin.
+/// each measured at every step. Listing is the costly part (4 to 8 ms on sphere_64 and
+/// fold_64). Self contact over sphere_64's first 90 frames, and fold_64's first 60, took
+/// 3.2 and 5.0 s at one separation (with boxes grown by a whole margin each, before
+/// [`SelfContactSolver::grown`] and the edge tree's pairs with itself), 2.5 and 4.8 s at
+/// two; with both, 2.0 and 4.2 s at two (377 and 466 listings), 1.9 and 5.1 s at three,
+/// 2.2 and 5.8 s at four. The frames are the same, to the bit, whatever the margin.
 const MARGIN_GAPS: f32 = 2.0;
 
 /// The trees and scratch space kept from step to step.
 #[derive(Debug, Default)]
 pub struct SelfContactSolver {
-    /// The triangles' and the edges' boxes swept over the step, grown by the largest
-    /// separation ([`SelfContactSolver::refit`]).
+    /// The triangles' and the edges' boxes swept over the step, grown
+    /// ([`SelfContactSolver::refit`]).
     triangle_tree: Bvh,
     edge_tree: Bvh,
     /// Mean velocity of each vertex over the step, as the contacts change it.
@@ -188,6 +199,11 @@ pub struct SelfContactSolver {
     hits: Vec<Pair>,
     /// Per-task buffers for gathering pairs and contacts without allocating.
     pair_gather: Gather<Pair>,
+    /// The edge tree's subtree pairs ([`Bvh::self_overlap_roots`]), and the edge pairs
+    /// listed under them, sorted.
+    edge_roots: Vec<[u32; 2]>,
+    edge_pairs: Vec<[u32; 2]>,
+    edge_gather: Gather<[u32; 2]>,
     contact_gather: Gather<Contact>,
     spring_gather: Gather<ContactSpring>,
 }
@@ -336,14 +352,23 @@ impl SelfContactSolver {
     /// How much the trees' boxes are grown: [`MARGIN_GAPS`] times the largest separation of
     /// a pair.
     fn margin(&self, mesh: &ContactMesh) -> f32 {
-        MARGIN_GAPS * 2.0 * mesh.half_gap.iter().fold(0.0f32, |m, g| m.max(*g))
+        MARGIN_GAPS * largest_gap(mesh)
     }
 
-    /// Refits the trees to the boxes swept from `x0` to `x1` (grown by the largest
-    /// separation) and lists in `pairs` the point–triangle and edge–edge pairs whose boxes
-    /// meet, leaving out pairs that share a vertex or hold one being untangled: the points'
-    /// pairs first, each point's and each edge's sorted. A point's box is grown by the
-    /// margin too, as both edges' are, so that pairs stay listed while their ends move
+    /// How much the trees' boxes (and a point's query box) are grown: half of the largest
+    /// separation and the margin, so that two boxes meet wherever their primitives are
+    /// within both ([`SelfContactSolver::candidates_cover`]). Grown by the whole margin of
+    /// two separations, half again as much, they met 3.8 ms of pairs a listing on
+    /// sphere_64 that the exact test then left out.
+    fn grown(&self, mesh: &ContactMesh) -> f32 {
+        0.5 * (largest_gap(mesh) + self.margin(mesh))
+    }
+
+    /// Refits the trees to the boxes swept from `x0` to `x1` (grown) and lists in `pairs`
+    /// the point–triangle and edge–edge pairs whose boxes meet and which may come within
+    /// their separation while listed ([`may_touch`]), leaving out pairs that share a
+    /// vertex or hold one being untangled: the points' pairs first, each point's and each
+    /// edge's sorted. A point's box is grown too, as both edges' are, so that pairs stay listed while their ends move
     /// under half the margin ([`SelfContactSolver::candidates_cover`]): with only the
     /// triangle's box grown, a pair a point–triangle spring needed was missed on the fold
     /// heap (180 springs in a step instead of 181).
@@ -356,43 +381,43 @@ impl SelfContactSolver {
         let free = |vertices: &[u32]| !vertices.iter().any(|&k| exempt[k as usize]);
         self.listed_with_exemptions = exempt.contains(&true);
         let points = mesh.len();
-        let margin = self.margin(mesh);
-        self.pair_gather.run(points + mesh.edges.len(), &mut self.pairs, |i, out| {
-            let start = out.len();
-            if let Some(e) = i.checked_sub(points) {
-                let e = e as u32;
-                let [a, b] = mesh.edges[e as usize];
-                if free(&[a, b]) {
-                    edge_tree.query_from(&edge_tree.aabb(e), e + 1, |f| {
-                        let [c, d] = mesh.edges[f as usize];
-                        let pair = Pair::EdgeEdge(e, f);
-                        if a != c
-                            && a != d
-                            && b != c
-                            && b != d
-                            && free(&[c, d])
-                            && may_touch(mesh, pair, x0, x1, margin)
-                        {
-                            out.push(pair);
-                        }
-                    });
-                }
-            } else {
-                let p = i as u32;
-                if free(&[p]) {
-                    triangle_tree.query(&swept_box(&[p], x0, x1).inflated(margin), |t| {
-                        let triangle = &mesh.triangles[t as usize];
-                        let pair = Pair::PointTriangle(p, t);
-                        if !triangle.contains(&p) && free(triangle) && may_touch(mesh, pair, x0, x1, margin) {
-                            out.push(pair);
-                        }
-                    });
-                }
+        let (margin, grown) = (self.margin(mesh), self.grown(mesh));
+        self.pair_gather.run(points, &mut self.pairs, |i, out| {
+            let p = i as u32;
+            if free(&[p]) {
+                let start = out.len();
+                triangle_tree.query(&swept_box(&[p], x0, x1).inflated(grown), |t| {
+                    let triangle = &mesh.triangles[t as usize];
+                    let pair = Pair::PointTriangle(p, t);
+                    if !triangle.contains(&p) && free(triangle) && may_touch(mesh, pair, x0, x1, margin) {
+                        out.push(pair);
+                    }
+                });
+                out[start..].sort_unstable_by_key(|pair| match *pair {
+                    Pair::PointTriangle(_, t) | Pair::EdgeEdge(_, t) => t,
+                });
             }
-            out[start..].sort_unstable_by_key(|pair| match *pair {
-                Pair::PointTriangle(_, other) | Pair::EdgeEdge(_, other) => other,
+        });
+        // The edge tree against itself, pairs of subtrees in parallel: a query per edge, each
+        // from the root, took 9 % longer on sphere_64.
+        edge_tree.self_overlap_roots(EDGE_ROOT_DEPTH, &mut self.edge_roots);
+        let roots = &self.edge_roots;
+        self.edge_gather.run(roots.len(), &mut self.edge_pairs, |i, out| {
+            edge_tree.overlaps_below(roots[i], |e, f| {
+                let ([a, b], [c, d]) = (mesh.edges[e as usize], mesh.edges[f as usize]);
+                if a != c
+                    && a != d
+                    && b != c
+                    && b != d
+                    && free(&[a, b, c, d])
+                    && may_touch(mesh, Pair::EdgeEdge(e, f), x0, x1, margin)
+                {
+                    out.push([e, f]);
+                }
             });
         });
+        self.edge_pairs.sort_unstable();
+        self.pairs.extend(self.edge_pairs.iter().map(|&[e, f]| Pair::EdgeEdge(e, f)));
     }
 
     /// Whether the candidates still cover the sweeps to `x1`: no end point has moved by
@@ -400,7 +425,8 @@ impl SelfContactSolver {
     /// centre of the box of their displacements), which brings no pair closer. (A pair's
     /// swept boxes, so moved back, are then each within half the margin of those listed,
     /// so a pair that can come within its separation still had listed boxes closer than
-    /// twice the margin, which they were grown by. The sweeps' starts must be covered too,
+    /// its separation and the margin, which they were grown by together
+    /// ([`SelfContactSolver::grown`]). The sweeps' starts must be covered too,
     /// which they are within the step that listed them, and are checked the same way for
     /// a later step's; at any time between, the common motion is a blend of the two.) A
     /// falling sheet, moving 5 mm a step at 10 steps a frame against a margin of 2 mm,
@@ -442,10 +468,10 @@ impl SelfContactSolver {
     }
 
     /// Refits the trees to the boxes of the primitives swept from `x0` to `x1`, grown by
-    /// the largest separation.
+    /// [`SelfContactSolver::grown`].
     fn refit(&mut self, mesh: &ContactMesh, x0: &[Vec3], x1: &[Vec3]) {
-        let margin = self.margin(mesh);
-        let swept = |vertices: &[u32]| swept_box(vertices, x0, x1).inflated(margin);
+        let grown = self.grown(mesh);
+        let swept = |vertices: &[u32]| swept_box(vertices, x0, x1).inflated(grown);
         self.triangle_tree.refit(mesh.triangles.len(), |t| swept(&mesh.triangles[t]));
         self.edge_tree.refit(mesh.edges.len(), |e| swept(&mesh.edges[e]));
     }
