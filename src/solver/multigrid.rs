@@ -840,6 +840,7 @@ impl Level {
     /// a pair of nodes share their columns (both nodes of each neighbouring aggregate), and
     /// `D⁻¹` couples them, so a pair's rows are formed together. Row `i` of `A S P₀` is
     /// one walk of `A`'s row: a node `k` reaches the two columns of its own aggregate.
+    ///
     /// The rotation blocks of `S P₀` are formed first, into `rotations`, once per node
     /// rather than once for each of the node's neighbours, which took half of the
     /// prolongator's time; its translation blocks are `S` itself ([`Rigid::translation`]).
