@@ -12,11 +12,10 @@ use super::elements::{BlockPattern, NO_HINGE, SpringElement, SymmetricBlockMatri
 use super::implicit::LinearDynamics;
 use super::integrate::Dynamics;
 use super::multigrid::Hierarchy;
-use super::pipeline::pipelined;
 use super::reduce;
 use crate::collision::body_contact::ContactBody;
 use crate::collision::motion_bounds::Surface;
-use crate::components::{BendingHinges, ClothTopology, MembraneTriangles, Springs};
+use crate::components::{BendingHinges, ClothTopology, Csr, MembraneTriangles, Springs};
 
 /// Air around the cloth.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -82,9 +81,70 @@ pub struct ForceScratch {
     hinge_moment: Vec<f32>,
     face_moment: Vec<[f32; 3]>,
     membrane: Vec<[Vec3; 3]>,
-    /// Local derivative blocks of a chunk of elements, computed in parallel before they
-    /// are added to the matrix in element order.
-    local_blocks: Vec<Mat3>,
+    /// Which elements each part of the rows assembles.
+    row_parts: RowParts,
+}
+
+/// The rows of a cloth's matrices cut into parts that assemble in parallel, and the
+/// elements of each kind with a particle in each part, in element order: found once per
+/// topology and number of parts. An element beside a cut is computed by both parts, each
+/// adding the blocks of its own rows.
+#[derive(Debug, Clone, Default)]
+struct RowParts {
+    /// The topology's build, rows and element counts (faces, hinges, membranes) they were
+    /// found for.
+    key: Option<(u32, usize, [usize; 3])>,
+    /// Where each part's rows begin, and after the last, the number of rows.
+    bounds: Vec<usize>,
+    faces: Csr,
+    hinges: Csr,
+    membranes: Csr,
+}
+
+impl RowParts {
+    /// Finds the parts for `model`'s topology, unless they were found for it already.
+    fn refresh(&mut self, model: &ForceModel<'_>) {
+        let rows = model.inv_mass.len();
+        let parts = row_part_count(rows);
+        let counts = [model.hinges.faces.len(), model.hinges.vertices.len(), model.membranes.indices.len()];
+        let key = Some((model.topology.builds, parts, counts));
+        if self.key == key && self.bounds.len() == parts + 1 {
+            return;
+        }
+        self.key = key;
+        self.bounds = (0..=parts).map(|k| k * rows / parts).collect();
+        self.faces = self.members(model.hinges.faces.iter().map(|f| f.vertices));
+        self.hinges = self.members(model.hinges.vertices.iter().copied());
+        self.membranes = self.members(model.membranes.indices.iter().copied());
+    }
+
+    /// Each part's elements, from the elements' particles.
+    fn members<const N: usize>(&self, stencils: impl Iterator<Item = [u32; N]>) -> Csr {
+        let part_of = |p: u32| self.bounds.partition_point(|&b| b <= p as usize) as u32 - 1;
+        let parts: Vec<[u32; N]> = stencils
+            .map(|stencil| {
+                let mut parts = stencil.map(part_of);
+                // Each part once (an entry of u32::MAX is skipped).
+                for k in 1..N {
+                    if parts[..k].contains(&parts[k]) {
+                        parts[k] = u32::MAX;
+                    }
+                }
+                parts
+            })
+            .collect();
+        Csr::from_items(self.bounds.len() - 1, &parts)
+    }
+}
+
+/// Parts of the rows an assembly is cut into: two per thread, so that a thread held up
+/// elsewhere leaves a part to the other; one on one thread. Parts of equal rows hold about
+/// equal elements, and more parts compute more elements twice (on the 64² hang scene,
+/// with two threads, 2 and 4 parts assembled in 2.77 and 2.76 ms a frame, 8 in 2.96).
+fn row_part_count(rows: usize) -> usize {
+    let threads = rayon::current_num_threads();
+    let parts = if threads == 1 { 1 } else { 2 * threads };
+    parts.clamp(1, rows.max(1))
 }
 
 /// The forces of a cloth's elements, element by element.
@@ -145,73 +205,37 @@ impl ElementForces for LocalForces<'_> {
     }
 }
 
-/// Elements whose local blocks are computed at once ([`element_chunk`]): at least this
-/// many, enough to share among the threads, and few enough on a small cloth that the
-/// buffer stays small (two chunks of bending faces are 0.66 MB; with 1 024 a chunk,
-/// 2.7 MB, 650 bytes a particle of the 64² hang scene).
-const MIN_ELEMENT_CHUNK: usize = 256;
-
-/// At most this many elements a chunk: two chunks of bending faces are 2.7 MB, 40 bytes a
-/// particle of the 256² hang scene.
-const MAX_ELEMENT_CHUNK: usize = 1024;
-
-/// Chunks an assembly is cut into where its elements allow, within the bounds above.
-const ELEMENT_CHUNKS: usize = 128;
-
-/// Elements a chunk of the pipelined assembly: a share of them, so that a large cloth
-/// does not pay a pipeline stage (three joins of the threads) for every few hundred
-/// elements. On the 256² hang scene, 508 stages of 256 bending faces held their
-/// assembly to 1.18 times its one-thread speed on two threads and the membranes' to 1.38;
-/// with 1 024 a chunk, 1.6 to 1.9 and 1.6 to 1.75, and the scene's frames 11 % faster.
-fn element_chunk(elements: usize) -> usize {
-    (elements / ELEMENT_CHUNKS).clamp(MIN_ELEMENT_CHUNK, MAX_ELEMENT_CHUNK)
-}
-
-/// Adds the local blocks `local(e)` of each of the `elements` (the `M` of its `N × N` on
-/// and above the diagonal, in [`upper_pairs`] order) to `matrix` (over `pattern`) at the
-/// storage of `stencil(e)` found by `positions(e)`: each chunk's blocks are computed in parallel,
-/// then added in element order while the next chunk is computed ([`pipelined`]), by two
-/// tasks that share the rows ([`SymmetricBlockMatrix::add_by_halves`]), so the sums are
-/// the same on any number of threads and the additions overlap the element work. Added by
-/// one task, they held the bending faces' assembly to 1.27 times its one-thread speed on
-/// two threads.
+/// Adds the local blocks `local(e)` of each element (the `M` of its `N × N` on and above
+/// the diagonal, in [`upper_pairs`] order) to `matrix` (over `pattern`) at the storage of
+/// `stencil(e)` found by `positions(e)`: each part of the rows (at `bounds`) in parallel,
+/// from the elements with a particle in it (`members`), adding the blocks of its own rows
+/// in element order, so every sum is the same on any number of threads and parts. Cutting
+/// the rows instead of the elements needs no buffer, no join between chunks and no
+/// serial additions: the earlier pipeline (chunks of elements computed in parallel while
+/// the last chunk was added by two tasks) held the 64² hang scene's assembly to 3.74 ms a
+/// frame where the parts take 2.76, the 256² scene's to 59 ms where they take 48.
 fn add_elements<const N: usize, const M: usize>(
     matrix: &mut SymmetricBlockMatrix,
     pattern: &BlockPattern,
-    elements: usize,
+    parts: (&[usize], &Csr),
     positions: impl Fn(usize) -> [u16; M] + Sync,
     stencil: impl Fn(usize) -> [u32; N] + Sync,
-    buffer: &mut Vec<Mat3>,
     local: impl Fn(usize) -> [Mat3; M] + Sync,
 ) {
-    let (size, per_chunk) = (M, element_chunk(elements));
-    let half = per_chunk.min(elements) * size;
-    let compute = |chunk: usize, blocks: &mut [Mat3]| {
-        let first = chunk * per_chunk;
-        let count = per_chunk.min(elements - first);
-        blocks[..count * size]
-            .par_chunks_mut(size)
-            .with_min_len(PARALLEL_MIN_LEN / 8)
-            .enumerate()
-            .for_each(|(k, out)| out.copy_from_slice(&local(first + k)));
-    };
-    pipelined(elements.div_ceil(per_chunk), buffer, half, compute, |chunk, blocks| {
-        let range = chunk * per_chunk..elements.min((chunk + 1) * per_chunk);
-        // Split at the middle element's first particle: elements near in order are near in
-        // the cloth, so the halves share the additions.
-        let split = stencil((range.start + range.end) / 2)[0] as usize;
-        matrix.add_by_halves(pattern, split, |rows, target, first| {
-            for (e, element_blocks) in range.clone().zip(blocks.chunks(size)) {
-                let particles = stencil(e);
-                let slots = pattern.upper_slots_at(particles, &positions(e));
-                for (((a, b), block), slot) in upper_pairs::<N>().zip(element_blocks).zip(slots) {
-                    let (p, q) = (particles[a], particles[b]);
-                    if rows.contains(&(p.min(q) as usize)) {
-                        target[slot as usize - first] += oriented(*block, p, q);
-                    }
+    let (bounds, members) = parts;
+    matrix.add_by_parts(pattern, bounds, |part, rows, target, first| {
+        let (low, count) = (rows.start as u32, rows.len() as u32);
+        for &e in members.row(part) {
+            let e = e as usize;
+            let particles = stencil(e);
+            let slots = pattern.upper_slots_at(particles, &positions(e));
+            for (((a, b), block), slot) in upper_pairs::<N>().zip(local(e)).zip(slots) {
+                let (p, q) = (particles[a], particles[b]);
+                if p.min(q).wrapping_sub(low) < count {
+                    target[slot as usize - first] += oriented(block, p, q);
                 }
             }
-        });
+        }
     });
 }
 
@@ -410,16 +434,17 @@ impl ForceModel<'_> {
             }
         }
         let bending = self.hinges.view();
-        let ForceScratch { hinge_delta, hinge_gradient, hinge_moment, local_blocks, .. } = scratch;
+        scratch.row_parts.refresh(self);
+        let ForceScratch { hinge_delta, hinge_gradient, hinge_moment, row_parts, .. } = scratch;
+        let bounds = &row_parts.bounds;
         let (faces, face_positions) = (&self.hinges.faces, &topology.face_positions);
         let face_stencil = |f: usize| faces[f].vertices;
         add_elements(
             dfdx,
             pattern,
-            faces.len(),
+            (bounds, &row_parts.faces),
             |f| face_positions[f],
             face_stencil,
-            local_blocks,
             |f| bending.face_jacobian(f, hinge_gradient, hinge_delta),
         );
         if !definite {
@@ -432,7 +457,7 @@ impl ForceModel<'_> {
                 })
             };
             let hinges = |h: usize| self.hinges.vertices[h];
-            add_elements(dfdx, pattern, self.hinges.vertices.len(), hinge_positions, hinges, local_blocks, |h| {
+            add_elements(dfdx, pattern, (bounds, &row_parts.hinges), hinge_positions, hinges, |h| {
                 let blocks = bending.hinge_curvature_jacobian(h, x, hinge_moment[h]);
                 upper_map::<4, 10, _>(|a, b| blocks[a][b])
             });
@@ -440,7 +465,7 @@ impl ForceModel<'_> {
         let material = &self.membranes.material;
         let triangles = |m: usize| self.membranes.indices[m];
         let membrane_positions = |m: usize| topology.membrane_positions[m];
-        add_elements(dfdx, pattern, self.membranes.indices.len(), membrane_positions, triangles, local_blocks, |m| {
+        add_elements(dfdx, pattern, (bounds, &row_parts.membranes), membrane_positions, triangles, |m| {
             let corners = triangles(m).map(|p| x[p as usize]);
             self.membranes.elements[m].position_jacobian(material, corners, definite)
         });

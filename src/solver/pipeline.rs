@@ -1,7 +1,7 @@
 //! Serial sums overlapped with parallel work: chunks of terms are computed in parallel
 //! into one half of a buffer while the chunk before is added, serially and in order, from
-//! the other half. Sums that must not depend on the number of threads (a matrix assembled
-//! from elements, a Galerkin product scattered from fine rows) keep their one order, and
+//! the other half. Sums that must not depend on the number of threads (a Galerkin product
+//! scattered from fine rows) keep their one order, and
 //! the additions run beside the work instead of after it, in a buffer of two chunks.
 
 /// For each chunk `c` in `0..count`: `compute(c, half)` fills a half of `buffer` (it may

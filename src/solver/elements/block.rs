@@ -230,20 +230,40 @@ impl BlockPattern {
     }
 }
 
-/// Lets `add(rows, blocks, first)` work on the rows below `split` and on the rest in two
-/// parallel tasks, given their `blocks` in a storage whose rows begin at `offsets`, the
-/// first at index `first`.
-fn add_by_halves(
+/// Lets `add(part, rows, blocks, first)` work on each part of the rows, between
+/// consecutive `bounds` (ascending, from 0 to the number of rows), in parallel tasks,
+/// given their `blocks` in a storage whose rows begin at `offsets`. Halves of the parts
+/// are split off by `rayon::join`, which allocates nothing.
+fn add_by_parts(
     offsets: &[u32],
     blocks: &mut [Mat3],
-    split: usize,
-    add: impl Fn(std::ops::Range<usize>, &mut [Mat3], usize) + Sync,
+    bounds: &[usize],
+    add: &(impl Fn(usize, std::ops::Range<usize>, &mut [Mat3], usize) + Sync),
 ) {
-    let rows = offsets.len() - 1;
-    let split = split.min(rows);
-    let first = offsets[split] as usize;
-    let (low, high) = blocks.split_at_mut(first);
-    rayon::join(|| add(0..split, low, 0), || add(split..rows, high, first));
+    split_parts(offsets, blocks, bounds, 0, add);
+}
+
+/// [`add_by_parts`] for the parts from `first_part` on, at `bounds`, whose `blocks` begin at
+/// the storage of the first bound's row.
+fn split_parts(
+    offsets: &[u32],
+    blocks: &mut [Mat3],
+    bounds: &[usize],
+    first_part: usize,
+    add: &(impl Fn(usize, std::ops::Range<usize>, &mut [Mat3], usize) + Sync),
+) {
+    match *bounds {
+        [] | [_] => {}
+        [start, end] => add(first_part, start..end, blocks, offsets[start] as usize),
+        [start, ..] => {
+            let middle = (bounds.len() - 1) / 2;
+            let (low, high) = blocks.split_at_mut((offsets[bounds[middle]] - offsets[start]) as usize);
+            rayon::join(
+                || split_parts(offsets, low, &bounds[..=middle], first_part, add),
+                || split_parts(offsets, high, &bounds[middle..], first_part + middle, add),
+            );
+        }
+    }
 }
 
 /// Lets `group(i, blocks)` work on each group of `size` rows from row `i` within `rows`
@@ -300,7 +320,10 @@ impl BlockMatrix {
         split: usize,
         add: impl Fn(std::ops::Range<usize>, &mut [Mat3], usize) + Sync,
     ) {
-        add_by_halves(&pattern.offsets, &mut self.blocks, split, add);
+        let rows = pattern.rows();
+        add_by_parts(&pattern.offsets, &mut self.blocks, &[0, split.min(rows), rows], &|_, rows, blocks, first| {
+            add(rows, blocks, first);
+        });
     }
 
     /// `out = self · x`.
@@ -386,16 +409,16 @@ impl SymmetricBlockMatrix {
         }
     }
 
-    /// Adds an element's blocks in two parallel tasks, one for the upper rows below
-    /// `split` and one for the rest, as [`BlockMatrix::add_by_halves`] does; block
-    /// `(p, q)` of an element belongs to row `min(p, q)`.
-    pub fn add_by_halves(
+    /// Lets `add(part, rows, blocks, first)` add to each part of the rows, between
+    /// consecutive `bounds`, in parallel, as [`BlockMatrix::add_by_halves`] does to its two;
+    /// block `(p, q)` of an element belongs to row `min(p, q)`.
+    pub fn add_by_parts(
         &mut self,
         pattern: &BlockPattern,
-        split: usize,
-        add: impl Fn(std::ops::Range<usize>, &mut [Mat3], usize) + Sync,
+        bounds: &[usize],
+        add: impl Fn(usize, std::ops::Range<usize>, &mut [Mat3], usize) + Sync,
     ) {
-        add_by_halves(&pattern.upper, &mut self.blocks, split, add);
+        add_by_parts(&pattern.upper, &mut self.blocks, bounds, &add);
     }
 
     /// Row `i` of the matrix times `x`: every block of the row in column order.
@@ -669,7 +692,7 @@ mod tests {
             // The same over the upper storage of a symmetric matrix.
             let mut m = SymmetricBlockMatrix::default();
             m.reset(&pattern);
-            m.add_by_halves(&pattern, split, |rows, blocks, first| {
+            m.add_by_parts(&pattern, &[0, split.min(3), 3], |_, rows, blocks, first| {
                 for row in rows {
                     for slot in pattern.upper[row] as usize..pattern.upper[row + 1] as usize {
                         blocks[slot - first] += Mat3::from_diagonal(Vec3::splat((10 * row + slot) as f32));
