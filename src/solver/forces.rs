@@ -91,9 +91,9 @@ pub struct ForceScratch {
 /// adding the blocks of its own rows.
 #[derive(Debug, Clone, Default)]
 struct RowParts {
-    /// The topology's build, rows and element counts (faces, hinges, membranes) they were
-    /// found for.
-    key: Option<(u32, usize, [usize; 3])>,
+    /// The topology's build, the number of parts, and the counts of rows, faces, hinges
+    /// and membranes they were found for.
+    key: Option<(u32, usize, [usize; 4])>,
     /// Where each part's rows begin, and after the last, the number of rows.
     bounds: Vec<usize>,
     faces: Csr,
@@ -106,9 +106,9 @@ impl RowParts {
     fn refresh(&mut self, model: &ForceModel<'_>) {
         let rows = model.inv_mass.len();
         let parts = row_part_count(rows);
-        let counts = [model.hinges.faces.len(), model.hinges.vertices.len(), model.membranes.indices.len()];
+        let counts = [rows, model.hinges.faces.len(), model.hinges.vertices.len(), model.membranes.indices.len()];
         let key = Some((model.topology.builds, parts, counts));
-        if self.key == key && self.bounds.len() == parts + 1 {
+        if self.key == key {
             return;
         }
         self.key = key;
