@@ -20,5 +20,10 @@ pub mod reduce;
 pub mod strain_limit;
 
 /// Below this many items a parallel loop runs on one thread: splitting costs more than it
-/// saves on small cloths.
-pub(crate) const PARALLEL_MIN_LEN: usize = 512;
+/// saves on small cloths. 512 before: the multigrid's coarse levels of a few hundred nodes
+/// ran on one thread, and hang_64 took 10.3 ms a frame against 9.6 to 9.9 at 128 (its
+/// solve 3.9 against 3.4 to 3.5), hang_128 41.6 to 43.1 against 39.3 to 40.1, with
+/// hang_256 and sphere_64 within the noise (alternating runs, two threads); 1 024 and
+/// 2 048 were slower (hang_64 11.8 to 12.2 and 12.5 to 12.6 against 11.6 to 11.8 at 512).
+/// The frames do not depend on it.
+pub(crate) const PARALLEL_MIN_LEN: usize = 128;
