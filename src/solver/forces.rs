@@ -102,20 +102,25 @@ struct RowParts {
 }
 
 impl RowParts {
-    /// Finds the parts for `model`'s topology, unless they were found for it already.
-    fn refresh(&mut self, model: &ForceModel<'_>) {
+    /// Finds the parts for `model`'s topology, unless they were found for it already, and
+    /// the hinges' lists too if `hinges` (only the exact, indefinite assembly adds the
+    /// hinges' own blocks; the lists are some 12 bytes a particle).
+    fn refresh(&mut self, model: &ForceModel<'_>, hinges: bool) {
         let rows = model.inv_mass.len();
         let parts = row_part_count(rows);
         let counts = [rows, model.hinges.faces.len(), model.hinges.vertices.len(), model.membranes.indices.len()];
         let key = Some((model.topology.builds, parts, counts));
-        if self.key == key {
-            return;
+        if self.key != key {
+            self.key = key;
+            self.bounds = (0..=parts).map(|k| k * rows / parts).collect();
+            self.faces = self.members(model.hinges.faces.iter().map(|f| f.vertices));
+            self.membranes = self.members(model.membranes.indices.iter().copied());
+            self.hinges = Csr::default();
         }
-        self.key = key;
-        self.bounds = (0..=parts).map(|k| k * rows / parts).collect();
-        self.faces = self.members(model.hinges.faces.iter().map(|f| f.vertices));
-        self.hinges = self.members(model.hinges.vertices.iter().copied());
-        self.membranes = self.members(model.membranes.indices.iter().copied());
+        // A built list has a row offset for each part and one more.
+        if hinges && self.hinges.offsets.is_empty() {
+            self.hinges = self.members(model.hinges.vertices.iter().copied());
+        }
     }
 
     /// Each part's elements, from the elements' particles.
@@ -434,7 +439,7 @@ impl ForceModel<'_> {
             }
         }
         let bending = self.hinges.view();
-        scratch.row_parts.refresh(self);
+        scratch.row_parts.refresh(self, !definite);
         let ForceScratch { hinge_delta, hinge_gradient, hinge_moment, row_parts, .. } = scratch;
         let bounds = &row_parts.bounds;
         let (faces, face_positions) = (&self.hinges.faces, &topology.face_positions);
