@@ -218,12 +218,13 @@ fn bench_times_the_named_scenes_and_writes_their_table_as_json() {
     }
     assert!(hang["max_strain"].as_f64().expect("a number") < 0.1, "the cloth hangs, it does not tear");
     // Where the time goes: each stage of the implicit step took some, and the rest of the
-    // mean frame is what the stages leave, so not below zero.
+    // mean frame is what the stages leave, so not below zero (a stage counted twice would
+    // leave less than nothing). The stages add up to the mean frame, which is not compared
+    // with the median `ms_per_frame`: on a loaded machine one slow frame in ten put the
+    // mean past 1.5 times the median.
     let stages = ["assembly_ms_per_frame", "preconditioner_ms_per_frame", "solve_ms_per_frame", "other_ms_per_frame"]
         .map(|field| hang[field].as_f64().unwrap_or_else(|| panic!("{field} is a number")));
     assert!(stages.iter().all(|&ms| ms > 0.0), "{stages:?}");
-    let frame = hang["ms_per_frame"].as_f64().expect("a number");
-    assert!(stages.iter().sum::<f64>() < 1.5 * frame, "{stages:?} of a {frame} ms median frame");
     assert!(text(&output.stdout).contains("where a frame's time goes"), "the stages' table");
 
     let unknown = selvedge(&["bench", "--quick", "--only", "hang_33"]);
