@@ -91,11 +91,12 @@ pub struct ForceScratch {
 /// adding the blocks of its own rows.
 #[derive(Debug, Clone, Default)]
 struct RowParts {
-    /// The topology's build, the number of parts, and the counts of rows, faces, hinges
-    /// and membranes they were found for.
-    key: Option<(u32, usize, [usize; 4])>,
+    /// The topology's build, the number of parts, and the counts of rows, springs, faces,
+    /// hinges and membranes they were found for.
+    key: Option<(u32, usize, [usize; 5])>,
     /// Where each part's rows begin, and after the last, the number of rows.
     bounds: Vec<usize>,
+    springs: Csr,
     faces: Csr,
     hinges: Csr,
     membranes: Csr,
@@ -108,11 +109,18 @@ impl RowParts {
     fn refresh(&mut self, model: &ForceModel<'_>, hinges: bool) {
         let rows = model.inv_mass.len();
         let parts = row_part_count(rows);
-        let counts = [rows, model.hinges.faces.len(), model.hinges.vertices.len(), model.membranes.indices.len()];
+        let counts = [
+            rows,
+            model.springs.len(),
+            model.hinges.faces.len(),
+            model.hinges.vertices.len(),
+            model.membranes.indices.len(),
+        ];
         let key = Some((model.topology.builds, parts, counts));
         if self.key != key {
             self.key = key;
             self.bounds = (0..=parts).map(|k| k * rows / parts).collect();
+            self.springs = self.members(model.springs.pairs.iter().copied());
             self.faces = self.members(model.hinges.faces.iter().map(|f| f.vertices));
             self.membranes = self.members(model.membranes.indices.iter().copied());
             self.hinges = Csr::default();
@@ -426,22 +434,35 @@ impl ForceModel<'_> {
         let topology = self.topology;
         let pattern = &topology.pattern;
         dfdx.reset(pattern);
-        dfdv.reset(pattern, (0..self.springs.len()).any(|s| self.spring(s).damping > 0.0));
-        for (s, positions) in topology.spring_positions.iter().enumerate() {
-            let pair = self.springs.pairs[s];
-            let [i, j] = pair.map(|p| p as usize);
-            let (spring, slots) = (self.spring(s), pattern.upper_slots_at(pair, positions));
-            let k = spring.position_jacobian(x[i], x[j], definite);
-            dfdx.add_local(pair, &slots, &[[k, -k], [-k, k]]);
-            if spring.damping > 0.0 {
-                let d = spring.velocity_jacobian(x[i], x[j]);
-                dfdv.add_local(pair, &slots, &[[d, -d], [-d, d]]);
-            }
-        }
-        let bending = self.hinges.view();
+        let damped = (0..self.springs.len()).any(|s| self.spring(s).damping > 0.0);
+        dfdv.reset(pattern, damped);
         scratch.row_parts.refresh(self, !definite);
         let ForceScratch { hinge_delta, hinge_gradient, hinge_moment, row_parts, .. } = scratch;
-        let bounds = &row_parts.bounds;
+        let bounds = row_parts.bounds.as_slice();
+        // A spring's blocks are `[K, −K; −K, K]` for its 3 × 3 derivative `K`.
+        let add_springs = |matrix: &mut SymmetricBlockMatrix,
+                           derivative: &(dyn Fn(usize, [Vec3; 2]) -> Mat3 + Sync)| {
+            let (pairs, spring_positions) = (&self.springs.pairs, &topology.spring_positions);
+            add_elements(
+                matrix,
+                pattern,
+                (bounds, &row_parts.springs),
+                |s| spring_positions[s],
+                |s| pairs[s],
+                |s| {
+                    let k = derivative(s, pairs[s].map(|p| x[p as usize]));
+                    [k, -k, k]
+                },
+            );
+        };
+        add_springs(dfdx, &|s, [a, b]| self.spring(s).position_jacobian(a, b, definite));
+        if let Some(dfdv) = dfdv.full_matrix() {
+            add_springs(dfdv, &|s, [a, b]| {
+                let spring = self.spring(s);
+                if spring.damping > 0.0 { spring.velocity_jacobian(a, b) } else { Mat3::ZERO }
+            });
+        }
+        let bending = self.hinges.view();
         let (faces, face_positions) = (&self.hinges.faces, &topology.face_positions);
         let face_stencil = |f: usize| faces[f].vertices;
         add_elements(

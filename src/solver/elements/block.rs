@@ -508,16 +508,9 @@ impl VelocityJacobian {
         }
     }
 
-    /// Adds an element's local blocks as [`SymmetricBlockMatrix::add_local`] does. Panics
-    /// unless reset `full`.
-    pub fn add_local<const N: usize, const M: usize>(
-        &mut self,
-        stencil: [u32; N],
-        slots: &[u32; M],
-        local: &[[Mat3; N]; N],
-    ) {
-        assert!(self.full, "off-diagonal blocks need a full velocity Jacobian");
-        self.matrix.add_local(stencil, slots, local);
+    /// The matrix over the whole pattern, to add elements' blocks to, if reset `full`.
+    pub fn full_matrix(&mut self) -> Option<&mut SymmetricBlockMatrix> {
+        self.full.then_some(&mut self.matrix)
     }
 
     /// Adds `diagonal[i] · I` to each diagonal block.
