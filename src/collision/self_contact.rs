@@ -351,9 +351,9 @@ impl SelfContactSolver {
 
     /// How far an end point may move, beyond the motion common to all, while a candidate
     /// list serves, twice over ([`SelfContactSolver::candidates_cover`]): [`MARGIN_GAPS`]
-    /// times the largest separation of a pair.
-    fn margin(&self, mesh: &ContactMesh) -> f32 {
-        MARGIN_GAPS * largest_gap(mesh)
+    /// times the largest separation of a pair, `gap` ([`largest_gap`]).
+    fn margin(gap: f32) -> f32 {
+        MARGIN_GAPS * gap
     }
 
     /// How much the trees' boxes (and a point's query box) are grown: half of the largest
@@ -362,8 +362,8 @@ impl SelfContactSolver {
     /// each (a third more at two separations), they met pairs that the exact test
     /// ([`may_touch`]) then left out: fold_64's first 60 frames listed for 5.0 s against
     /// 3.8.
-    fn grown(&self, mesh: &ContactMesh) -> f32 {
-        0.5 * (largest_gap(mesh) + self.margin(mesh))
+    fn grown(gap: f32) -> f32 {
+        0.5 * (gap + Self::margin(gap))
     }
 
     /// Refits the trees to the boxes swept from `x0` to `x1` (grown) and lists in `pairs`
@@ -384,7 +384,8 @@ impl SelfContactSolver {
         let free = |vertices: &[u32]| !vertices.iter().any(|&k| exempt[k as usize]);
         self.listed_with_exemptions = exempt.contains(&true);
         let points = mesh.len();
-        let (margin, grown) = (self.margin(mesh), self.grown(mesh));
+        let gap = largest_gap(mesh);
+        let (margin, grown) = (Self::margin(gap), Self::grown(gap));
         self.pair_gather.run(points, &mut self.pairs, |i, out| {
             let p = i as u32;
             if free(&[p]) {
@@ -438,7 +439,7 @@ impl SelfContactSolver {
         if x1.len() != self.listed_end.len() {
             return false;
         }
-        let half = 0.5 * self.margin(mesh);
+        let half = 0.5 * Self::margin(largest_gap(mesh));
         let half_squared = half * half;
         let moves =
             || x1.par_iter().zip(&self.listed_end).with_min_len(PARALLEL_MIN_LEN).map(|(now, listed)| *now - *listed);
@@ -473,7 +474,7 @@ impl SelfContactSolver {
     /// Refits the trees to the boxes of the primitives swept from `x0` to `x1`, grown by
     /// [`SelfContactSolver::grown`].
     fn refit(&mut self, mesh: &ContactMesh, x0: &[Vec3], x1: &[Vec3]) {
-        let grown = self.grown(mesh);
+        let grown = Self::grown(largest_gap(mesh));
         let swept = |vertices: &[u32]| swept_box(vertices, x0, x1).inflated(grown);
         self.triangle_tree.refit(mesh.triangles.len(), |t| swept(&mesh.triangles[t]));
         self.edge_tree.refit(mesh.edges.len(), |e| swept(&mesh.edges[e]));
@@ -948,7 +949,7 @@ mod tests {
         let mut solver = SelfContactSolver::default();
         solver.untangler.clear(mesh.len());
         solver.candidates(&mesh, &x0, &x1);
-        let margin = solver.margin(&mesh);
+        let margin = SelfContactSolver::margin(largest_gap(&mesh));
         let points = (0..mesh.len() as u32).flat_map(|p| {
             let triangles = mesh.triangles.iter().enumerate().filter(move |(_, t)| !t.contains(&p));
             triangles.map(move |(t, _)| Pair::PointTriangle(p, t as u32))
