@@ -6,7 +6,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use criterion::{Bencher, BenchmarkId, Criterion, criterion_group, criterion_main};
-use glam::{Affine3A, Mat3, Vec3};
+use glam::{Affine3A, Vec3};
 use selvedge::Simulation;
 use selvedge::builders::grid::build_grid;
 use selvedge::collision::intersection::IntersectionCounter;
@@ -14,6 +14,7 @@ use selvedge::components::{BendingDesc, BendingLawDesc, ClothMaterial, ClothTopo
 use selvedge::scene::parse_scene;
 use selvedge::solver::descent::{DescentSettings, DescentWorkspace, descend};
 use selvedge::solver::elements::{SymmetricBlockMatrix, VelocityJacobian};
+use selvedge::solver::filter::Filters;
 use selvedge::solver::forces::{Air, ClothDynamics, ForceModel, ForceScratch};
 use selvedge::solver::integrate::{Integrator, IntegratorWorkspace, MethodSettings, step};
 use selvedge::solver::probes::most_stretched_edge;
@@ -124,7 +125,7 @@ fn kernels(c: &mut Criterion) {
         let mut system = SymmetricBlockMatrix { blocks: dfdx.blocks.iter().map(|k| -h * h * *k).collect() };
         system.add_diagonal(pattern, |i| 1.0 / cloth.particles.inv_mass[i]);
         let rhs: Vec<Vec3> = force.iter().map(|f| h * *f).collect();
-        let filter = vec![Mat3::IDENTITY; count];
+        let filter = Filters::free(count);
         let one_sweep = DescentSettings { sweeps: 1, spectral_radius: 0.0, contact_bounds: false };
         let mut descent = DescentWorkspace::default();
         let mut delta = vec![Vec3::ZERO; count];

@@ -33,6 +33,7 @@ use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
 use super::elements::{BlockPattern, SymmetricBlockMatrix};
+use super::filter::Filters;
 use crate::collision::motion_bounds::Bound;
 
 /// Rows per parallel task in a colour: a row is a few hundred flops, and colours are a
@@ -246,7 +247,7 @@ const MAX_ADVANCES: u32 = 16;
 /// Starting the sweeps from the bounds instead, every particle held back by them, would
 /// leave the sweeps a global error to remove, which Gauss–Seidel removes last: a falling
 /// strip's speed stayed at the bound per step.
-fn advance_anchor(motion: &mut BoundedMotion<'_>, delta: &mut [Vec3], filter: &[Mat3], bounds: &mut [Bound]) -> f32 {
+fn advance_anchor(motion: &mut BoundedMotion<'_>, delta: &mut [Vec3], filter: &Filters, bounds: &mut [Bound]) -> f32 {
     let n = delta.len();
     let frame = motion.frame();
     let mut wanted = (0..n)
@@ -284,7 +285,7 @@ fn advance_anchor(motion: &mut BoundedMotion<'_>, delta: &mut [Vec3], filter: &[
             let offset = frame.offset(i, *d);
             let allowed = reach(bound, frame.anchor[i], offset);
             if allowed < 1.0 {
-                if filter[i] == Mat3::IDENTITY {
+                if filter.is_free(i) {
                     *d += offset * (allowed - 1.0) / frame.scale;
                 } else {
                     *bound = Bound::FREE;
@@ -318,7 +319,7 @@ pub fn descend(
     colouring: &Colouring,
     system: &SymmetricBlockMatrix,
     rhs: &[Vec3],
-    filter: &[Mat3],
+    filter: &Filters,
     settings: &DescentSettings,
     tolerance: f32,
     mut motion: Option<BoundedMotion<'_>>,
@@ -328,7 +329,7 @@ pub fn descend(
     let n = delta.len();
     ws.step.clear();
     ws.step.extend((0..n).map(|i| {
-        let s = filter[i];
+        let s = filter.block(i);
         let diagonal = s * system.diagonal(pattern, i) * s + (Mat3::IDENTITY - s);
         if diagonal.determinant().abs() > 0.0 { diagonal.inverse() * s } else { Mat3::ZERO }
     }));
@@ -342,7 +343,7 @@ pub fn descend(
         wanted = advance_anchor(motion, delta, filter, &mut ws.bounds);
     }
     let target: f64 = f64::from(tolerance).powi(2)
-        * rhs.iter().zip(filter).map(|(r, s)| f64::from((*s * *r).length_squared())).sum::<f64>();
+        * rhs.iter().enumerate().map(|(i, r)| f64::from(filter.apply(i, *r).length_squared())).sum::<f64>();
     let rho2 = settings.spectral_radius * settings.spectral_radius;
     let mut omega = 1.0f32;
     let mut sweeps = settings.sweeps;
@@ -361,9 +362,9 @@ pub fn descend(
             let frame = motion.as_ref().map(BoundedMotion::frame);
             ws.update.par_iter_mut().zip(rows.par_iter()).with_min_len(ROWS_PER_TASK).for_each(|(update, &i)| {
                 let i = i as usize;
-                let r = filter[i] * (rhs[i] - system.row_product(pattern, i, current));
+                let r = filter.apply(i, rhs[i] - system.row_product(pattern, i, current));
                 let (correction, r, cut) = match frame {
-                    Some(f) => f.newton_step(i, current[i], step[i], r, &bounds[i], filter[i] == Mat3::IDENTITY),
+                    Some(f) => f.newton_step(i, current[i], step[i], r, &bounds[i], filter.is_free(i)),
                     None => (step[i] * r, r, false),
                 };
                 *update = (correction, f64::from(r.length_squared()), cut);
@@ -497,9 +498,9 @@ mod tests {
         // pinned, particle 39 free only across x, loaded by gravity-like forces.
         let n = 40;
         let (pattern, system) = chain(n, 1.0, 1.0e3);
-        let mut filter = vec![Mat3::IDENTITY; n];
-        filter[0] = Mat3::ZERO;
-        filter[n - 1] = Mat3::IDENTITY - Mat3::from_diagonal(Vec3::X);
+        let mut filter = Filters::free(n);
+        filter.pin(0);
+        filter.constrain(n - 1, Mat3::IDENTITY - Mat3::from_diagonal(Vec3::X));
         let rhs: Vec<Vec3> = (0..n).map(|i| Vec3::new(0.5, -1.0, 0.1 * i as f32)).collect();
         // Exact solution of the filtered system: along each axis, the chain is a
         // tridiagonal system with the pinned end fixed at zero; x at particle 39 is fixed
@@ -574,7 +575,7 @@ mod tests {
         let solution = vec![-0.012 / h * Vec3::Y; n];
         let mut rhs = vec![Vec3::ZERO; n];
         system.multiply(&pattern, &solution, &mut rhs);
-        let (colouring, filter) = (Colouring::greedy(&pattern), vec![Mat3::IDENTITY; n]);
+        let (colouring, filter) = (Colouring::greedy(&pattern), Filters::free(n));
         let after = |sweeps: u32, bounded: bool| -> Vec<Vec3> {
             let settings = DescentSettings { sweeps, ..DescentSettings::default() };
             let (mut delta, mut ws, mut anchor) = (vec![Vec3::ZERO; n], DescentWorkspace::default(), x0.clone());
@@ -612,7 +613,7 @@ mod tests {
         let solution: Vec<Vec3> = (0..n).map(|i| if i >= 36 { -0.012 / h * Vec3::Y } else { Vec3::ZERO }).collect();
         let mut rhs = vec![Vec3::ZERO; n];
         system.multiply(&pattern, &solution, &mut rhs);
-        let (colouring, filter) = (Colouring::greedy(&pattern), vec![Mat3::IDENTITY; n]);
+        let (colouring, filter) = (Colouring::greedy(&pattern), Filters::free(n));
         let surface = Surface { triangles: &triangles, edges: &edges };
         // Where the particles are after `sweeps` sweeps, with or without the bounds: the
         // sweeps of a longer run begin as a shorter run's did.

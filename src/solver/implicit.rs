@@ -28,6 +28,7 @@ use super::contact_springs::{self, Blocks, ContactSpring, Weights};
 use super::descent::{BoundedMotion, Colouring, DescentSettings, DescentWorkspace, descend};
 use super::elements::spring::outer;
 use super::elements::{BlockPattern, SymmetricBlockMatrix, VelocityJacobian};
+use super::filter::Filters;
 use super::integrate::{Dynamics, StageTimes, StepReport};
 use super::multigrid::{Hierarchy, Multigrid};
 use crate::collision::body_bounds;
@@ -156,7 +157,7 @@ pub struct ImplicitWorkspace {
     partials: Vec<f64>,
     /// Per particle, the directions its Δv may take: identity (free), zero (pinned) or a
     /// projection off a contact normal.
-    filter: Vec<Mat3>,
+    filter: Filters,
     /// Per particle, the part of Δv the constraints prescribe.
     prescribed: Vec<Vec3>,
     /// Block descent's buffers.
@@ -254,12 +255,10 @@ pub fn implicit_step(
     ] {
         buffer.resize(n, Vec3::ZERO);
     }
-    ws.filter.clear();
-    ws.filter.extend((0..n).map(|i| if dynamics.is_free(i) { Mat3::IDENTITY } else { Mat3::ZERO }));
+    ws.filter.reset(n, |i| dynamics.is_free(i));
     for c in constraints.iter() {
-        let i = c.particle as usize;
         let projection = if c.stick { Mat3::ZERO } else { Mat3::IDENTITY - outer(c.normal, c.normal) };
-        ws.filter[i] = projection * ws.filter[i];
+        ws.filter.constrain(c.particle as usize, projection);
     }
     prescribe(dynamics, constraints, v, &mut ws.prescribed);
     let (theta, Rayleigh { alpha, beta }) = (settings.theta, settings.rayleigh);
@@ -742,7 +741,7 @@ fn conjugate_gradient(
         let jacobi = hierarchy.is_none().then_some(&*preconditioner);
         fused(z, r, partials, |i, z, r| {
             if let Some(jacobi) = jacobi {
-                *z = filter[i] * (jacobi[i] * r);
+                *z = filter.apply(i, jacobi[i] * r);
             }
             f64::from(r.dot(*z))
         })
@@ -751,14 +750,14 @@ fn conjugate_gradient(
     // r = S (b − A δ), z = M⁻¹ r, d = z.
     multiply_system(system, pattern, springs, weights, delta, product);
     let mut rr = fused(residual, product, partials, |i, r, q| {
-        *r = filter[i] * (rhs[i] - q);
+        *r = filter.apply(i, rhs[i] - q);
         f64::from(r.length_squared())
     });
     let mut rz = precondition(residual, preconditioned, partials);
     direction.copy_from_slice(preconditioned);
     rhs.par_chunks(C)
         .enumerate()
-        .map(|(c, b)| (0..b.len()).map(|k| f64::from((filter[c * C + k] * b[k]).length_squared())).sum())
+        .map(|(c, b)| (0..b.len()).map(|k| f64::from(filter.apply(c * C + k, b[k]).length_squared())).sum())
         .collect_into_vec(partials);
     let target = f64::from(tolerance).powi(2) * total(partials);
     for iteration in 0..settings.cg_max_iterations {
@@ -768,7 +767,7 @@ fn conjugate_gradient(
         // q = S A d, and d·q.
         multiply_system(system, pattern, springs, weights, direction, product);
         let curvature = fused(product, direction, partials, |i, q, d| {
-            *q = filter[i] * *q;
+            *q = filter.apply(i, *q);
             f64::from(d.dot(*q))
         });
         if curvature <= 0.0 {

@@ -5,6 +5,7 @@ pub mod cfl;
 pub mod contact_springs;
 pub mod descent;
 pub mod elements;
+pub mod filter;
 pub mod forces;
 pub mod gather;
 pub mod geometry;

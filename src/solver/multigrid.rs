@@ -49,6 +49,7 @@ use rayon::prelude::*;
 use super::PARALLEL_MIN_LEN;
 use super::elements::spring::{outer, skew};
 use super::elements::{BlockMatrix, BlockPattern, SymmetricBlockMatrix};
+use super::filter::Filters;
 use super::pipeline::pipelined;
 use crate::components::Csr;
 
@@ -574,12 +575,18 @@ fn symmetric_eigen(m: Mat3) -> (Mat3, Vec3) {
 struct Operator<'a> {
     pattern: &'a BlockPattern,
     matrix: &'a BlockMatrix,
-    filter: Option<&'a [Mat3]>,
+    filter: Option<&'a Filters>,
 }
 
 impl Operator<'_> {
     fn filter(&self, i: usize) -> Mat3 {
-        self.filter.map_or(Mat3::IDENTITY, |f| f[i])
+        self.filter.map_or(Mat3::IDENTITY, |f| f.block(i))
+    }
+
+    /// `S_i v`.
+    #[inline]
+    fn filtered(&self, i: usize, v: Vec3) -> Vec3 {
+        self.filter.map_or(v, |f| f.apply(i, v))
     }
 
     /// `(S A_ii S + I − S)⁻¹ S` for node `i` (with a one on any empty diagonal entry), zero
@@ -601,7 +608,7 @@ impl Operator<'_> {
             for k in pattern.slots(i) {
                 sum -= matrix.blocks[k] * z[pattern.columns[k] as usize];
             }
-            *out = self.filter(i) * sum;
+            *out = self.filtered(i, sum);
         });
     }
 }
@@ -1014,7 +1021,7 @@ impl Multigrid {
         hierarchy: &Hierarchy,
         pattern: &BlockPattern,
         system: &SymmetricBlockMatrix,
-        filter: &[Mat3],
+        filter: &Filters,
         positions: &[Vec3],
     ) {
         lump(pattern, system, &hierarchy.fine, &mut self.shifts, &mut self.fine);
@@ -1063,7 +1070,7 @@ impl Multigrid {
 
     /// Builds the levels' smoothers, prolongators and matrices, and the coarsest factor,
     /// from the finest level's matrix.
-    fn setup(&mut self, hierarchy: &Hierarchy, filter: &[Mat3], positions: &[Vec3]) {
+    fn setup(&mut self, hierarchy: &Hierarchy, filter: &Filters, positions: &[Vec3]) {
         self.rebuild = false;
         self.fresh_iterations = None;
         self.tried_stale = false;
@@ -1104,7 +1111,7 @@ impl Multigrid {
 
     /// One symmetric V-cycle on the finest level's residual `r` (filtered), giving the
     /// correction `z` (within the filter).
-    pub fn apply(&mut self, hierarchy: &Hierarchy, filter: &[Mat3], r: &[Vec3], z: &mut [Vec3]) {
+    pub fn apply(&mut self, hierarchy: &Hierarchy, filter: &Filters, r: &[Vec3], z: &mut [Vec3]) {
         let finest = Operator { pattern: &hierarchy.fine, matrix: &self.fine, filter: Some(filter) };
         cycle(&mut self.levels, &hierarchy.coarsenings, &self.matrices, &mut self.coarsest, finest, r, z);
     }
@@ -1151,7 +1158,7 @@ fn cycle(
         .zip(level.scratch.par_iter())
         .with_min_len(PARALLEL_MIN_LEN)
         .enumerate()
-        .for_each(|(i, (z, c))| *z += a.filter(i) * *c);
+        .for_each(|(i, (z, c))| *z += a.filtered(i, *c));
     level.smooth(a, r, z, false);
 }
 
@@ -1246,8 +1253,8 @@ mod tests {
     }
 
     /// A fixed, irregular vector within `filter`.
-    fn probe(filter: &[Mat3], seed: u32) -> Vec<Vec3> {
-        (0..filter.len()).map(|i| filter[i] * irregular(i as u32 ^ seed)).collect()
+    fn probe(filter: &Filters, seed: u32) -> Vec<Vec3> {
+        (0..filter.len()).map(|i| filter.apply(i, irregular(i as u32 ^ seed))).collect()
     }
 
     fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
@@ -1371,10 +1378,10 @@ mod tests {
         let hierarchy = Hierarchy::build(&pattern, pattern.clone());
         assert!(hierarchy.sizes().len() >= 3, "levels {:?}", hierarchy.sizes());
         let n = pattern.rows();
-        let mut filter = vec![Mat3::IDENTITY; n];
-        filter[0] = Mat3::ZERO;
-        filter[47] = Mat3::ZERO;
-        filter[1000] = Mat3::IDENTITY - outer(Vec3::Y, Vec3::Y);
+        let mut filter = Filters::free(n);
+        filter.pin(0);
+        filter.pin(47);
+        filter.constrain(1000, Mat3::IDENTITY - outer(Vec3::Y, Vec3::Y));
         let mut multigrid = Multigrid::default();
         let positions: Vec<Vec3> = (0..n as u32).map(|p| Vec3::new((p % 48) as f32, (p / 48) as f32, 0.0)).collect();
         multigrid.prepare(&hierarchy, &pattern, &system, &filter, &positions);
@@ -1406,7 +1413,7 @@ mod tests {
             x.iter_mut().zip(&z).for_each(|(x, z)| *x += *z);
             system.multiply(&pattern, &x, &mut product);
             for i in 0..n {
-                residual[i] = filter[i] * (b[i] - product[i]);
+                residual[i] = filter.apply(i, b[i] - product[i]);
             }
         }
         let end = dot(&residual, &residual).sqrt();
