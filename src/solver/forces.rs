@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use super::PARALLEL_MIN_LEN;
 use super::contact_springs::ContactSpring;
 use super::descent::Colouring;
-use super::elements::block::{oriented, upper_map, upper_pair, upper_pairs};
+use super::elements::block::{by_parts, oriented, upper_map, upper_pair, upper_pairs};
 use super::elements::{BlockPattern, NO_HINGE, SpringElement, SymmetricBlockMatrix, VelocityJacobian};
 use super::implicit::LinearDynamics;
 use super::integrate::Dynamics;
@@ -70,7 +70,9 @@ pub fn triangle_wind_force(x: [Vec3; 3], v: [Vec3; 3], wind: Vec3, wind_drag: f3
 }
 
 /// Buffers the force model writes per element before gathering per particle, so that each
-/// particle's sum runs over its elements in a fixed order whatever the thread count.
+/// particle's sum runs over its elements in a fixed order whatever the thread count (the
+/// membranes, the most numerous, are added by parts of the rows instead, see
+/// [`ForceModel::eval`]).
 #[derive(Debug, Clone, Default)]
 pub struct ForceScratch {
     spring: Vec<Vec3>,
@@ -80,7 +82,6 @@ pub struct ForceScratch {
     hinge_delta: Vec<f32>,
     hinge_moment: Vec<f32>,
     face_moment: Vec<[f32; 3]>,
-    membrane: Vec<[Vec3; 3]>,
     /// Which elements each part of the rows assembles.
     row_parts: RowParts,
 }
@@ -166,8 +167,6 @@ trait ElementForces {
     fn spring(&self, s: usize) -> Vec3;
     /// Forces of hinge `h` on its four vertices.
     fn hinge(&self, h: usize) -> [Vec3; 4];
-    /// Forces of membrane triangle `m` on its corners.
-    fn membrane(&self, m: usize) -> [Vec3; 3];
     /// Wind force on each vertex of triangle `t`.
     fn wind(&self, t: usize) -> Vec3;
 }
@@ -179,9 +178,6 @@ impl ElementForces for ForceScratch {
     }
     fn hinge(&self, h: usize) -> [Vec3; 4] {
         self.hinge_gradient[h].map(|g| -self.hinge_moment[h] * g)
-    }
-    fn membrane(&self, m: usize) -> [Vec3; 3] {
-        self.membrane[m]
     }
     fn wind(&self, t: usize) -> Vec3 {
         self.triangle[t]
@@ -207,10 +203,6 @@ impl ElementForces for LocalForces<'_> {
         let bending = self.model.hinges.view();
         let moment = self.model.hinge_moment(h, |f| bending.face_moments(f, self.delta));
         bending.hinge_forces(h, self.x, moment)
-    }
-    fn membrane(&self, m: usize) -> [Vec3; 3] {
-        let membranes = self.model.membranes;
-        membranes.elements[m].forces(&membranes.material, membranes.indices[m].map(|p| self.x[p as usize]))
     }
     fn wind(&self, t: usize) -> Vec3 {
         let tri = self.model.triangles[t].map(|p| p as usize);
@@ -315,9 +307,13 @@ impl ForceModel<'_> {
         self.topology.hinge_faces.row(h).iter().map(|&side| face_moment(side as usize / 3)[side as usize % 3]).sum()
     }
 
-    /// Total force on particle `i` at velocity `v` [m/s], the forces of its elements
-    /// given by `elements` (see [`ElementForces`]), user forces left out.
-    fn particle_force(&self, i: usize, v: Vec3, rate: f32, elements: &impl ElementForces) -> Vec3 {
+    /// The force on particle `i` at velocity `v` [m/s] before its membranes': weight,
+    /// damping, springs and hinges, the elements' forces given by `elements` (see
+    /// [`ElementForces`]). A particle's total adds its membranes' forces to it in the
+    /// membranes' order, then the wind's ([`ForceModel::add_wind`]), user forces left
+    /// out: the order [`ForceModel::eval`] and [`ForceModel::force_on`] share, so that
+    /// both give the same bits.
+    fn force_before_membranes(&self, i: usize, v: Vec3, rate: f32, elements: &impl ElementForces) -> Vec3 {
         let topology = self.topology;
         let mass = 1.0 / self.inv_mass[i];
         let mut total = mass * (self.gravity - rate * v);
@@ -328,15 +324,22 @@ impl ForceModel<'_> {
         for &corner in topology.particle_hinges.row(i) {
             total += elements.hinge(corner as usize / 4)[corner as usize % 4];
         }
-        for &corner in topology.particle_membranes.row(i) {
-            total += elements.membrane(corner as usize / 3)[corner as usize % 3];
-        }
+        total
+    }
+
+    /// Adds the wind's force on particle `i` to its `total`, triangle by triangle.
+    fn add_wind(&self, i: usize, total: &mut Vec3, elements: &impl ElementForces) {
         if self.air.wind_drag > 0.0 {
-            for &t in topology.particle_triangles.row(i) {
-                total += elements.wind(t as usize);
+            for &t in self.topology.particle_triangles.row(i) {
+                *total += elements.wind(t as usize);
             }
         }
-        total
+    }
+
+    /// Forces of membrane triangle `m` on its corners at positions `x`.
+    fn membrane_forces(&self, m: usize, x: &[Vec3]) -> [Vec3; 3] {
+        let membranes = self.membranes;
+        membranes.elements[m].forces(&membranes.material, membranes.indices[m].map(|p| x[p as usize]))
     }
 
     /// The total force on each of `particles` at state `(x, v)` and time `t` [N], as
@@ -373,7 +376,12 @@ impl ForceModel<'_> {
         particles.map(move |p| {
             let i = p as usize;
             let user = self.user_forces.iter().filter(|(q, _)| *q == p).map(|(_, f)| *f);
-            user.fold(self.particle_force(i, v[i], rate, &local), |total, f| total + f)
+            let mut total = self.force_before_membranes(i, v[i], rate, &local);
+            for &corner in self.topology.particle_membranes.row(i) {
+                total += self.membrane_forces(corner as usize / 3, x)[corner as usize % 3];
+            }
+            self.add_wind(i, &mut total, &local);
+            user.fold(total, |total, f| total + f)
         })
     }
 
@@ -389,12 +397,6 @@ impl ForceModel<'_> {
         scratch.hinge_gradient.resize(self.hinges.vertices.len(), [Vec3::ZERO; 4]);
         self.hinges.view().gradients(x, &mut scratch.hinge_gradient);
 
-        let material = &self.membranes.material;
-        scratch.membrane.resize(self.membranes.indices.len(), [Vec3::ZERO; 3]);
-        scratch.membrane.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(m, f)| {
-            *f = self.membranes.elements[m].forces(material, self.membranes.indices[m].map(|p| x[p as usize]));
-        });
-
         let wind = self.air.wind_at(t);
         let with_wind = self.air.wind_drag > 0.0;
         scratch.triangle.resize(if with_wind { self.triangles.len() } else { 0 }, Vec3::ZERO);
@@ -403,10 +405,29 @@ impl ForceModel<'_> {
             *f = triangle_wind_force(tri.map(|p| x[p]), tri.map(|p| v[p]), wind, self.air.wind_drag);
         });
 
+        // Each part of the rows gathers its particles' forces before the membranes', adds
+        // the forces of the membranes with a corner among them in the membranes' order,
+        // which is the order of each particle's own list, then the wind's. A membrane
+        // beside a cut is computed by both parts; kept instead, the membranes' forces
+        // were 72 bytes a particle.
+        scratch.row_parts.refresh(self, false);
         let scratch = &*scratch;
-        let rate = self.damping_rate();
-        out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, f)| {
-            *f = self.particle_force(i, v[i], rate, scratch);
+        let (rate, parts) = (self.damping_rate(), &scratch.row_parts);
+        by_parts(out, &parts.bounds, |part, rows, out| {
+            for (i, f) in rows.clone().zip(out.iter_mut()) {
+                *f = self.force_before_membranes(i, v[i], rate, scratch);
+            }
+            for &m in parts.membranes.row(part) {
+                let forces = self.membrane_forces(m as usize, x);
+                for (&p, force) in self.membranes.indices[m as usize].iter().zip(forces) {
+                    if rows.contains(&(p as usize)) {
+                        out[p as usize - rows.start] += force;
+                    }
+                }
+            }
+            for (i, f) in rows.zip(out.iter_mut()) {
+                self.add_wind(i, f, scratch);
+            }
         });
         for &(particle, force) in self.user_forces {
             out[particle as usize] += force;

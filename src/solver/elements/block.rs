@@ -240,27 +240,38 @@ fn add_by_parts(
     bounds: &[usize],
     add: &(impl Fn(usize, std::ops::Range<usize>, &mut [Mat3], usize) + Sync),
 ) {
-    split_parts(offsets, blocks, bounds, 0, add);
+    split_parts(&|row| offsets[row] as usize, blocks, bounds, 0, add);
 }
 
-/// [`add_by_parts`] for the parts from `first_part` on, at `bounds`, whose `blocks` begin at
-/// the storage of the first bound's row.
-fn split_parts(
-    offsets: &[u32],
-    blocks: &mut [Mat3],
+/// Lets `work(part, rows, values)` work on each part of the rows, between consecutive
+/// `bounds`, given the part's `values` (one per row), in parallel tasks as
+/// [`add_by_parts`] does.
+pub(crate) fn by_parts<T: Send>(
+    values: &mut [T],
+    bounds: &[usize],
+    work: impl Fn(usize, std::ops::Range<usize>, &mut [T]) + Sync,
+) {
+    split_parts(&|row| row, values, bounds, 0, &|part, rows, values, _| work(part, rows, values));
+}
+
+/// [`add_by_parts`] for the parts from `first_part` on, at `bounds`, whose `items` begin
+/// at `offset` of the first bound's row.
+fn split_parts<T: Send>(
+    offset: &(impl Fn(usize) -> usize + Sync),
+    items: &mut [T],
     bounds: &[usize],
     first_part: usize,
-    add: &(impl Fn(usize, std::ops::Range<usize>, &mut [Mat3], usize) + Sync),
+    add: &(impl Fn(usize, std::ops::Range<usize>, &mut [T], usize) + Sync),
 ) {
     match *bounds {
         [] | [_] => {}
-        [start, end] => add(first_part, start..end, blocks, offsets[start] as usize),
+        [start, end] => add(first_part, start..end, items, offset(start)),
         [start, ..] => {
             let middle = (bounds.len() - 1) / 2;
-            let (low, high) = blocks.split_at_mut((offsets[bounds[middle]] - offsets[start]) as usize);
+            let (low, high) = items.split_at_mut(offset(bounds[middle]) - offset(start));
             rayon::join(
-                || split_parts(offsets, low, &bounds[..=middle], first_part, add),
-                || split_parts(offsets, high, &bounds[middle..], first_part + middle, add),
+                || split_parts(offset, low, &bounds[..=middle], first_part, add),
+                || split_parts(offset, high, &bounds[middle..], first_part + middle, add),
             );
         }
     }
