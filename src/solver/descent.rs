@@ -33,7 +33,7 @@ use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
 use super::elements::{BlockPattern, SymmetricBlockMatrix};
-use super::filter::Filters;
+use super::filter::{Filters, filtered_inverse};
 use crate::collision::motion_bounds::Bound;
 
 /// Rows per parallel task in a colour: a row is a few hundred flops, and colours are a
@@ -328,11 +328,7 @@ pub fn descend(
 ) -> u32 {
     let n = delta.len();
     ws.step.clear();
-    ws.step.extend((0..n).map(|i| {
-        let s = filter.block(i);
-        let diagonal = s * system.diagonal(pattern, i) * s + (Mat3::IDENTITY - s);
-        if diagonal.determinant().abs() > 0.0 { diagonal.inverse() * s } else { Mat3::ZERO }
-    }));
+    ws.step.extend((0..n).map(|i| filtered_inverse(filter.block(i), system.diagonal(pattern, i))));
     ws.previous.resize(n, Vec3::ZERO);
     ws.before.resize(n, Vec3::ZERO);
     // The longest move the bounds are asked to allow: the farthest the start took a

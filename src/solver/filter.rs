@@ -98,6 +98,17 @@ impl Filters {
     }
 }
 
+/// `(S D S + I − S)⁻¹ S`, for a node with diagonal block `D` and filter `S`: its Jacobi
+/// (or Newton) step, which stays within the filter. A one stands in for any empty diagonal
+/// entry (a coarse rotation the multigrid dropped from an aggregate's frame leaves an empty
+/// row and column); zero where the block is singular still.
+pub fn filtered_inverse(s: Mat3, diagonal: Mat3) -> Mat3 {
+    let mut diagonal = s * diagonal * s + (Mat3::IDENTITY - s);
+    let empty = Vec3::new(diagonal.x_axis.x, diagonal.y_axis.y, diagonal.z_axis.z).cmpeq(Vec3::ZERO);
+    diagonal += Mat3::from_diagonal(Vec3::select(empty, Vec3::ONE, Vec3::ZERO));
+    if diagonal.determinant().abs() > 0.0 { diagonal.inverse() * s } else { Mat3::ZERO }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

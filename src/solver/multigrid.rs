@@ -49,7 +49,7 @@ use rayon::prelude::*;
 use super::PARALLEL_MIN_LEN;
 use super::elements::spring::{outer, skew};
 use super::elements::{BlockMatrix, BlockPattern, SymmetricBlockMatrix};
-use super::filter::Filters;
+use super::filter::{Filters, filtered_inverse};
 use super::pipeline::pipelined;
 use crate::components::Csr;
 
@@ -592,12 +592,7 @@ impl Operator<'_> {
     /// `(S A_ii S + I − S)⁻¹ S` for node `i` (with a one on any empty diagonal entry), zero
     /// where that is singular.
     fn inverse_diagonal(&self, i: usize) -> Mat3 {
-        let s = self.filter(i);
-        let mut diagonal = s * self.matrix.block(self.pattern, i as u32, i as u32) * s + (Mat3::IDENTITY - s);
-        // A coarse rotation dropped from an aggregate's frame leaves an empty row and column.
-        let empty = Vec3::new(diagonal.x_axis.x, diagonal.y_axis.y, diagonal.z_axis.z).cmpeq(Vec3::ZERO);
-        diagonal += Mat3::from_diagonal(Vec3::select(empty, Vec3::ONE, Vec3::ZERO));
-        if diagonal.determinant().abs() > 0.0 { diagonal.inverse() * s } else { Mat3::ZERO }
+        filtered_inverse(self.filter(i), self.matrix.block(self.pattern, i as u32, i as u32))
     }
 
     /// `out = S (r − A z)`.
