@@ -157,6 +157,7 @@ fn kernels(c: &mut Criterion) {
                 self_collision: false,
                 contact_springs: &mut [],
                 bodies: &[],
+                start_force: None,
             };
             let mut ws = IntegratorWorkspace::default();
             ws.resize(count);

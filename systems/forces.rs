@@ -74,10 +74,13 @@ impl ForceEnvironment<'_> {
 /// Writes the total force at the current state into [`Particles::force`], and keeps the
 /// positions the step starts from. Runs in [`SubstepSystems::Forces`].
 ///
-/// An implicit step evaluates the forces it needs itself; before it, only the force on
-/// the particles touching a body is read (whether it presses them into the body). Where
-/// those are few, only theirs is evaluated ([`ForceModel::force_on`], the same bits as
-/// the whole cloth's), the rest left zero: on the hang_64 bench, 1 ms of a 20 ms frame.
+/// An implicit step reads the start force only where a particle touches a body (whether
+/// the force presses it into the body) and evaluates what else it needs itself, so for a
+/// cloth touching nothing the force is left zero. A cloth touching a body is evaluated
+/// whole, and the implicit step takes that evaluation instead of making it again
+/// ([`SolverWorkspace::whole_start_force`]). Evaluated at the touching particles alone
+/// ([`ForceModel::force_on`]: serial, each element once for each of its particles there)
+/// and again whole by the step, it cost sphere_64 some 10 ms a frame.
 pub fn accumulate_forces(
     environment: ForceEnvironment,
     solver: Res<SolverSettings>,
@@ -86,25 +89,17 @@ pub fn accumulate_forces(
     for (mut particles, elements, touching, mut workspace) in &mut cloths {
         workspace.step_start.clone_from(&particles.position);
         let mut force = std::mem::take(&mut particles.force);
-        let model = environment.model(&particles.inv_mass, elements);
-        let (x, v, t) = (&particles.position, &particles.velocity, environment.time());
-        if solver.integrator.is_implicit() && touching.0.len() * LOCAL_SHARE < particles.len() {
-            force.fill(Vec3::ZERO);
-            let touched = touching.0.iter().map(|touch| touch.particle);
-            for (p, total) in touched.clone().zip(model.force_on(touched, x, v, t, &mut workspace.forces)) {
-                force[p as usize] = total;
-            }
+        let whole = !solver.integrator.is_implicit() || !touching.0.is_empty();
+        if whole {
+            let model = environment.model(&particles.inv_mass, elements);
+            model.eval(&particles.position, &particles.velocity, environment.time(), &mut workspace.forces, &mut force);
         } else {
-            model.eval(x, v, t, &mut workspace.forces, &mut force);
+            force.fill(Vec3::ZERO);
         }
+        workspace.whole_start_force = whole;
         particles.force = force;
     }
 }
-
-/// Below one particle in this many touching a body, an implicit step's start force is
-/// evaluated at the touching particles alone. [`ForceModel::force_on`] computes each of a
-/// particle's elements for it, and an element has up to four particles.
-const LOCAL_SHARE: usize = 8;
 
 /// Adds this module's systems.
 pub fn add_to(schedules: &mut SimSchedules) {

@@ -40,7 +40,7 @@ pub fn integrate_cloths(
     for (index, (cloth, mut particles, elements, touching, mut workspace, self_collision, self_touching)) in
         cloths.iter_mut().enumerate()
     {
-        let SolverWorkspace { integrator, forces, support, constraints, .. } = &mut *workspace;
+        let SolverWorkspace { integrator, forces, support, constraints, whole_start_force, .. } = &mut *workspace;
         // Particles the last step left on a body stay on it while the forces press them
         // into it (closing what gap the last step left), held fast where static friction
         // held them; those pulled away are let go. On a free prop they follow the prop,
@@ -83,6 +83,7 @@ pub fn integrate_cloths(
             self_collision,
             contact_springs: self_touching.map_or(&mut [], |s| s.into_inner().0.as_mut_slice()),
             bodies: &bodies,
+            start_force: whole_start_force.then_some(&particles.force),
         };
         let mut result = Ok(StepReport::default());
         for split in 0..splits {

@@ -179,6 +179,11 @@ pub struct SolverWorkspace {
     pub support: Vec<Vec3>,
     /// The contact constraints of the current implicit step.
     pub constraints: Vec<VelocityConstraint>,
+    /// Whether the particles' force is the whole cloth's at the step's start, evaluated
+    /// with `forces` and nothing else since (not only the touching particles'), so that an
+    /// implicit step linearising there may take it
+    /// ([`crate::solver::forces::ClothDynamics::start_force`]).
+    pub whole_start_force: bool,
 }
 
 /// What an embedding renderer needs each frame: vertex normals beside the particle

@@ -452,6 +452,20 @@ impl ForceModel<'_> {
         dfdv: &mut VelocityJacobian,
     ) {
         self.eval(x, v, t, scratch, out);
+        self.derivatives(x, definite, scratch, dfdx, dfdv);
+    }
+
+    /// The derivatives of [`ForceModel::assemble`] at `x`, from the element data (the
+    /// hinges' angles, gradients and moments) that [`ForceModel::eval`] left in `scratch`
+    /// at the same positions.
+    fn derivatives(
+        &self,
+        x: &[Vec3],
+        definite: bool,
+        scratch: &mut ForceScratch,
+        dfdx: &mut SymmetricBlockMatrix,
+        dfdv: &mut VelocityJacobian,
+    ) {
         let topology = self.topology;
         let pattern = &topology.pattern;
         dfdx.reset(pattern);
@@ -560,6 +574,13 @@ pub struct ClothDynamics<'a> {
     pub contact_springs: &'a mut [ContactSpring],
     /// The solid bodies where the step ends, which bound block descent's iterations.
     pub bodies: &'a [ContactBody],
+    /// The forces at the state of the first linearisation, evaluated there by
+    /// [`ForceModel::eval`] with `scratch`, which nothing has used since: that
+    /// linearisation takes them, and the element data the evaluation left in `scratch`,
+    /// instead of evaluating again. `accumulate_forces` evaluates a cloth that touches a
+    /// body at many particles at the step's start, where the implicit step linearises
+    /// next: on sphere_64, one evaluation a step, a tenth of a frame.
+    pub start_force: Option<&'a [Vec3]>,
 }
 
 impl Dynamics for ClothDynamics<'_> {
@@ -618,7 +639,13 @@ impl LinearDynamics for ClothDynamics<'_> {
         dfdx: &mut SymmetricBlockMatrix,
         dfdv: &mut VelocityJacobian,
     ) {
-        self.model.assemble(x, v, t, true, self.scratch, force, dfdx, dfdv);
+        match self.start_force.take() {
+            Some(start) => {
+                force.copy_from_slice(start);
+                self.model.derivatives(x, true, self.scratch, dfdx, dfdv);
+            }
+            None => self.model.assemble(x, v, t, true, self.scratch, force, dfdx, dfdv),
+        }
     }
 }
 
@@ -774,6 +801,46 @@ mod tests {
         let expected: Vec<Vec3> = chosen.iter().map(|&p| whole[p as usize]).collect();
         assert_eq!(local, expected);
         assert!(expected.iter().all(|f| f.length() > 0.0));
+    }
+
+    /// A linearisation that takes the start force evaluated before it (and the element
+    /// data that evaluation left in the scratch) gives the bits of one that evaluates, and
+    /// takes it only once: the next linearisation, at another state, evaluates there.
+    #[test]
+    fn a_linearisation_taking_the_start_force_matches_one_that_evaluates() {
+        let fixture = Fixture::new();
+        let air = Air { drag: 0.7, area_damping: 0.1, wind: Vec3::new(1.0, 0.5, 3.0), wind_drag: 0.6, gust: None };
+        let user_forces = [(5, Vec3::new(0.1, 0.2, -0.3))];
+        let model = fixture.model(air, &user_forces);
+        let (x, v) = (&fixture.particles.position, &fixture.particles.velocity);
+        let elsewhere: Vec<Vec3> = x.iter().map(|p| 1.1 * *p + Vec3::Y * p.x * p.z).collect();
+        let n = x.len();
+        let linearisations = |given: bool| {
+            let mut scratch = ForceScratch::default();
+            let mut start = vec![Vec3::ZERO; n];
+            if given {
+                model.eval(x, v, 0.4, &mut scratch, &mut start);
+            }
+            let mut dynamics = ClothDynamics {
+                model,
+                free_inv_mass: &fixture.topology.free_inv_mass,
+                scratch: &mut scratch,
+                self_collision: false,
+                contact_springs: &mut [],
+                bodies: &[],
+                start_force: given.then_some(&start),
+            };
+            [x, &elsewhere].map(|at| {
+                let (mut force, mut dfdx, mut dfdv) =
+                    (vec![Vec3::ZERO; n], SymmetricBlockMatrix::default(), VelocityJacobian::default());
+                dynamics.linearize(at, v, 0.4, &mut force, &mut dfdx, &mut dfdv);
+                (force, dfdx, dfdv)
+            })
+        };
+        let (taken, evaluated) = (linearisations(true), linearisations(false));
+        assert_eq!(taken, evaluated);
+        assert_ne!(evaluated[0].0, evaluated[1].0);
+        assert!(evaluated[0].1.blocks.iter().any(|b| *b != Mat3::ZERO));
     }
 
     #[test]

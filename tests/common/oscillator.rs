@@ -92,6 +92,7 @@ impl ParticleSystem {
             self_collision: false,
             contact_springs: &mut [],
             bodies: &[],
+            start_force: None,
         };
         let mut x = self.x.clone();
         let mut v = vec![Vec3::ZERO; x.len()];
