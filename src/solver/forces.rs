@@ -578,8 +578,8 @@ pub struct ClothDynamics<'a> {
     /// [`ForceModel::eval`] with `scratch`, which nothing has used since: that
     /// linearisation takes them, and the element data the evaluation left in `scratch`,
     /// instead of evaluating again. `accumulate_forces` evaluates a cloth that touches a
-    /// body at many particles at the step's start, where the implicit step linearises
-    /// next: on sphere_64, one evaluation a step, a tenth of a frame.
+    /// body at the step's start, where the implicit step linearises next: over sphere_64's
+    /// whole run, one evaluation a step, 7 ms of some 135 a frame.
     pub start_force: Option<&'a [Vec3]>,
 }
 
