@@ -23,8 +23,8 @@ use crate::components::{
     SolverWorkspace, StrainLimit, Touching, UserForces,
 };
 use crate::resources::{
-    AirSettings, ClothContacts, DivergenceLimit, EditAction, Gravity, HealthReport, IntegratorStats, ProbeRequests,
-    Probes, PropWorld, ScheduledEdit, ScheduledEdits, SimClock, SolverSettings, StepSettings,
+    AdaptiveSteps, AirSettings, ClothContacts, DivergenceLimit, EditAction, Gravity, HealthReport, IntegratorStats,
+    ProbeRequests, Probes, PropWorld, ScheduledEdit, ScheduledEdits, SimClock, SolverSettings, StepSettings,
 };
 use crate::solver::descent::DescentSettings;
 use crate::solver::forces::{Air, Gust};
@@ -275,6 +275,9 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
     }
 
     world.insert_resource(StepSettings { dt: time.dt, substeps: time.substeps });
+    if let Some(motion) = scene.solver.step_motion {
+        world.insert_resource(AdaptiveSteps { frame_time: 1.0 / time.fps, most: time.substeps, motion });
+    }
     world.insert_resource(Gravity(scene.gravity));
     world.insert_resource(AirSettings(Air {
         drag: scene.air.drag,

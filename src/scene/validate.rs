@@ -141,6 +141,14 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
             format!("{alpha} is above 1; the CFL limit needs α ≤ 1 (0.5 is safe)"),
         ));
     }
+    if let Some(motion) = scene.solver.step_motion
+        && positive("solver.step_motion", motion)? > 1.0
+    {
+        return Err(SceneError::invalid(
+            "solver.step_motion",
+            format!("{motion} edges a step lets a landing cloth tear; a quarter (0.25) keeps it whole"),
+        ));
+    }
     let tolerance = positive("solver.tolerance", scene.solver.tolerance)?;
     if tolerance >= 1.0 {
         return Err(SceneError::invalid(
