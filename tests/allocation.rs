@@ -81,3 +81,12 @@ fn the_bench_scenes_allocate_nothing_once_warm() {
         assert_eq!(count, 0, "{name} allocated {count} times in 2 warm frames");
     }
 }
+
+#[test]
+fn frames_whose_steps_follow_the_motion_allocate_nothing_once_warm() {
+    let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    // Falling from rest, sphere_64's sheet takes one more step every frame or two.
+    let mut sim = common::bundled_with("bench/sphere_64.ron", |scene| scene.solver.step_motion = Some(0.25));
+    let count = allocations_after(&mut sim, 3, 2);
+    assert_eq!(count, 0, "sphere_64 with step_motion allocated {count} times in 2 warm frames");
+}
