@@ -4,7 +4,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 
 use crate::collision::collider::ColliderState;
-use crate::components::{Collider, Particles, Triangles};
+use crate::components::{Collider, Particles, SelfTouching, Triangles};
 use crate::resources::{AdaptiveSteps, HealthReport, SimClock, StepSettings};
 use crate::schedule::{FrameSystems, SimSchedules, SubstepSchedule};
 
@@ -29,7 +29,10 @@ pub fn run_substeps(world: &mut World) {
 /// start or end): a bound on its motion relative to any collider, the largest of all the
 /// cloths'. Edges are measured at rest, over the triangles' sides (an inner edge counted
 /// twice); a cloth without triangles reaches infinitely far, so that it takes every step.
-/// Runs in [`FrameSystems::Prepare`], after the edits that may have cut triangles.
+///
+/// The self-contact springs the last step left, made for its length, are made over for
+/// the new one ([`crate::solver::contact_springs::ContactSpring::restep`]). Runs in
+/// [`FrameSystems::Prepare`], after the edits that may have cut triangles.
 pub fn plan_frame_steps(
     adaptive: Option<Res<AdaptiveSteps>>,
     clock: Res<SimClock>,
@@ -37,6 +40,7 @@ pub fn plan_frame_steps(
     cloths: Query<(&Particles, &Triangles)>,
     mut surfaces: Local<Vec<ColliderState>>,
     mut settings: ResMut<StepSettings>,
+    mut touching: Query<&mut SelfTouching>,
 ) {
     let Some(adaptive) = adaptive else {
         return;
@@ -68,7 +72,13 @@ pub fn plan_frame_steps(
             if edge > 0.0 { fastest * frame_time / edge } else { f32::INFINITY }
         })
         .fold(0.0, f32::max);
+    let last = settings.dt;
     *settings = adaptive.settings(adaptive.steps(reach));
+    if settings.dt != last {
+        for spring in touching.iter_mut().flat_map(|t| t.into_inner().0.iter_mut()) {
+            spring.restep(last, settings.dt);
+        }
+    }
 }
 
 /// Adds this module's systems.

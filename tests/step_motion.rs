@@ -105,3 +105,42 @@ fn a_step_motion_beyond_an_edge_or_not_above_zero_is_refused() {
         assert!(error.contains("step_motion") && error.contains(says), "{motion}: {error}");
     }
 }
+
+/// A self-contact spring restores `SPRING_RECOVERY` = 0.95 of its pair's missing gap in
+/// the step it serves, at rest and with no other force: `k h² w / (1 + k h² w)` for the
+/// pair's inverse mass `w`. The springs the last step left are made for its length; when
+/// the next frame takes another number of steps they must be made over, or a spring made
+/// at ten steps a frame serves a frame of one a hundred times too stiff.
+#[test]
+fn self_contact_springs_are_made_over_when_the_frame_takes_another_number_of_steps() {
+    use bevy_ecs::system::RunSystemOnce;
+    use selvedge::components::{ClothTopology, SelfTouching};
+    use selvedge::resources::StepSettings;
+    use selvedge::systems::substeps::plan_frame_steps;
+
+    // The upper layer of layer_slope slides ever faster, so frames take ever more steps.
+    let mut sim = common::bundled_with("layer_slope.ron", |scene| {
+        scene.solver.substeps = Some(20);
+        scene.solver.step_motion = Some(0.02);
+    });
+    let (mut checked, mut changes) = (0, 0);
+    let mut last_dt = sim.world().resource::<StepSettings>().dt;
+    for _ in 0..30 {
+        sim.world_mut().run_system_once(plan_frame_steps).expect("the planner runs");
+        let world = sim.world_mut();
+        let h = world.resource::<StepSettings>().dt;
+        let (springs, topology) = world.query::<(&SelfTouching, &ClothTopology)>().single(world).expect("one cloth");
+        let live: Vec<_> = springs.0.iter().filter(|s| s.stiffness > 0.0).collect();
+        changes += usize::from(h != last_dt && !live.is_empty());
+        for spring in live {
+            let khw = spring.stiffness * h * h * spring.stencil.inverse_mass(&topology.free_inv_mass);
+            let recovery = khw / (1.0 + khw);
+            assert!((recovery - 0.95).abs() < 1e-4, "a spring restores {recovery} of its gap in a step of {h} s");
+            checked += 1;
+        }
+        last_dt = h;
+        sim.step_frame().unwrap_or_else(|e| panic!("{e}"));
+    }
+    assert!(changes >= 3, "the step changed only {changes} times with springs to make over");
+    assert!(checked > 100, "only {checked} springs checked");
+}

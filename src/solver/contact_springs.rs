@@ -102,6 +102,18 @@ impl ContactSpring {
         self.slip(v).length().max(STATIC_SPEED)
     }
 
+    /// Makes a spring made for a step of length `from` serve one of length `to` [s]: its
+    /// stiffness scaled to restore the same fraction of the missing gap in the step (it
+    /// was made as `k h²` over the pair's mass), and its friction, lagged from its push,
+    /// with it. Without this, a spring made at the end of a frame of ten steps served the
+    /// first of a frame of one a hundred times too stiff, and one made there the next
+    /// frame's ten steps a hundred times too soft.
+    pub fn restep(&mut self, from: f32, to: f32) {
+        let scale = (from / to) * (from / to);
+        self.stiffness *= scale;
+        self.drag *= scale;
+    }
+
     /// Sets the friction to Coulomb's for the push `push` [N] and the pair's velocities
     /// `v`, lagged (as in IPC): a damper that brakes the pair's tangential speed at `v`
     /// with `μ push`, or, below [`STATIC_SPEED`], holds it like a stiff damper.
