@@ -104,14 +104,14 @@ impl ContactSpring {
 
     /// Makes a spring made for a step of length `from` serve one of length `to` [s]: its
     /// stiffness scaled to restore the same fraction of the missing gap in the step (it
-    /// was made as `k h²` over the pair's mass), and its friction, lagged from its push,
-    /// with it. Without this, a spring made at the end of a frame of ten steps served the
-    /// first of a frame of one a hundred times too stiff, and one made there the next
-    /// frame's ten steps a hundred times too soft.
+    /// was made as `k h²` over the pair's mass). Its friction stays: it was lagged from
+    /// the force the pair carried, which does not depend on the step (a layer at rest
+    /// carries its weight), while the push of the rescaled spring at the same distance
+    /// would give a quarter of it when the step doubles. Without this, a spring made at
+    /// the end of a frame of ten steps served the first of a frame of one a hundred times
+    /// too stiff, and one made there the next frame's ten steps a hundred times too soft.
     pub fn restep(&mut self, from: f32, to: f32) {
-        let scale = (from / to) * (from / to);
-        self.stiffness *= scale;
-        self.drag *= scale;
+        self.stiffness *= (from / to) * (from / to);
     }
 
     /// Sets the friction to Coulomb's for the push `push` [N] and the pair's velocities
