@@ -25,12 +25,13 @@ pub struct StepSettings {
 }
 
 /// A frame's steps chosen from the motion (`solver.step_motion`): as few as keep every
-/// particle within `motion` mean edges of its cloth per step, relative to the colliders,
-/// and at most `most`. Substeps exist for contact: a particle stopped by a body after the
-/// solve, while its neighbours are not, strains the cloth by about its step's move (on
-/// sphere_64's landing, at 2.4 m/s, 0.22 and 0.28 mean edges a step, 10 and 8 steps a
-/// frame, held the largest strain to 6 %, 0.32 gave 35 % and 0.45 tore the sheet), and
-/// a cloth at rest on a body moves far less.
+/// particle's move towards what it may touch within `motion` mean edges of its cloth per
+/// step, and at most `most` (planned by [`crate::systems::substeps::plan_frame_steps`]).
+/// Substeps exist for contact: a particle stopped by a body after the solve, while its
+/// neighbours are not, strains the cloth by about its step's move (on sphere_64's
+/// landing, at 2.4 m/s, 0.22 and 0.28 mean edges a step, 10 and 8 steps a frame, held the
+/// largest strain to 6 %, 0.32 gave 35 % and 0.45 tore the sheet), and a cloth at rest on
+/// a body moves far less.
 #[derive(Resource, Debug, Clone, Copy, PartialEq)]
 pub struct AdaptiveSteps {
     /// Length of a frame [s].

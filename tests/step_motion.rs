@@ -1,25 +1,32 @@
-//! Frames whose steps follow the motion (`solver.step_motion`): a falling cloth takes as
-//! many steps as keep each particle within the limit, up to `substeps`, and still falls
-//! as implicit Euler with those steps predicts; a cloth at rest takes one step, unless a
-//! collider moves.
+//! Frames whose steps follow the motion (`solver.step_motion`): a cloth takes as many
+//! steps as keep each particle's move towards what it may touch within the limit, up to
+//! `substeps`, and still falls as implicit Euler with those steps predicts. A cloth
+//! falling far from anything, or at rest, takes one step a frame; one nearing the
+//! ground takes the steps its speed asks for; a collider moving near a cloth, and parts
+//! of a self-colliding cloth moving apart, make it take more.
 
 mod common;
 
-use selvedge::components::Particles;
+use selvedge::components::{Cloth, Particles};
 
 const G: f64 = 9.81;
 const FPS: f64 = 60.0;
+/// The planner's slack on a particle's reach over a frame (`REACH_SLACK`).
+const REACH_SLACK: f64 = 2.0;
 
 /// A 1 m square of 12 × 12 particles, flat, at rest at height 20 m, whose mean triangle
-/// side is `(2 · 1/11 + √2/11) / 3`, under `gravity` [m/s²], with `colliders` (RON).
-fn square(gravity: f64, colliders: &str) -> selvedge::Simulation {
+/// side is `(2 · 1/11 + √2/11) / 3`, under `gravity` [m/s²], with `colliders` (RON), a
+/// ground at `ground` [m] if given, colliding with itself if `self_colliding`.
+fn square(gravity: f64, colliders: &str, ground: Option<f64>, self_colliding: bool) -> selvedge::Simulation {
+    let ground = ground.map_or(String::new(), |height| format!("ground: (enabled: true, height: {height}),"));
+    let self_collision = if self_colliding { "self_collision: (separation: 0.002)," } else { "" };
     common::simulation(&format!(
         "Scene(name: \"motion\", gravity: (0.0, {}, 0.0),
           solver: (integrator: ImplicitEuler, substeps: 12, step_motion: 0.05), time: (fps: 60, frames: 60),
           cloths: [(name: \"c\", shape: Grid(size: (1.0, 1.0), resolution: (12, 12)),
                     placement: (translation: (0.0, 20.0, 0.0), rotation_deg: (90.0, 0.0, 0.0)),
-                    material: {})],
-          colliders: [{colliders}])",
+                    {self_collision} material: {})],
+          colliders: [{colliders}], {ground})",
         -gravity,
         common::material(200.0, 0.1)
     ))
@@ -27,6 +34,12 @@ fn square(gravity: f64, colliders: &str) -> selvedge::Simulation {
 
 fn mean_edge() -> f64 {
     (2.0 + 2f64.sqrt()) / (3.0 * 11.0)
+}
+
+/// The steps a frame takes when its fastest particle moves at `speed` [m/s] towards
+/// what it may touch.
+fn steps_for(speed: f64) -> u64 {
+    (speed / FPS / mean_edge() / 0.05).ceil().clamp(1.0, 12.0) as u64
 }
 
 /// The steps each of `frames` frames took.
@@ -40,51 +53,106 @@ fn steps_per_frame(sim: &mut selvedge::Simulation, frames: u32) -> Vec<u64> {
         .collect()
 }
 
+/// The cloth's mean height and vertical velocity [m, m/s].
+fn height_and_speed(sim: &mut selvedge::Simulation) -> (f64, f64) {
+    let p = sim.world_mut().query::<&Particles>().single(sim.world()).expect("one cloth").clone();
+    let mean = |f: &dyn Fn(usize) -> f32| (0..p.len()).map(|i| f64::from(f(i))).sum::<f64>() / p.len() as f64;
+    (mean(&|i| p.position[i].y), mean(&|i| p.velocity[i].y))
+}
+
 #[test]
-fn a_falling_cloth_takes_the_steps_its_speed_needs_and_falls_as_implicit_euler() {
-    let mut sim = square(G, "");
+fn a_cloth_falling_far_from_anything_takes_one_step_a_frame_and_falls_as_implicit_euler() {
+    let mut sim = square(G, "", None, false);
     let frames = 30;
     let steps = steps_per_frame(&mut sim, frames);
-    for (k, &taken) in steps.iter().enumerate() {
-        // Frame k starts at g k / 60 m/s, and moves that far over 1/60 s, in edges.
-        let reach = G * k as f64 / FPS / FPS / mean_edge();
-        let wanted = (reach / 0.05).ceil().clamp(1.0, 12.0);
-        // Rounding may tip a reach on a whole number of limits either way.
-        assert!(
-            (taken as f64 - wanted).abs() <= 1.0,
-            "frame {k}: {taken} steps, the speed asks for {wanted} ({reach} edges)"
-        );
-    }
-    assert_eq!(steps[0], 1, "a cloth at rest starts with one step");
-    assert_eq!(steps.last(), Some(&12), "a fast cloth takes every step");
+    assert!(steps.iter().all(|&n| n == 1), "nothing to touch: one step a frame, not {steps:?}");
     // Implicit Euler moves each step by h v_{n+1}, g h² / 2 more than the exact fall:
-    // over frames of n_k steps of 1/(60 n_k), g / (2 · 60²) · Σ 1 / n_k more.
+    // over frames of one step, g / (2 · 60²) a frame more.
     let t = f64::from(frames) / FPS;
-    let extra = G / (2.0 * FPS * FPS) * steps.iter().map(|&n| 1.0 / n as f64).sum::<f64>();
-    let expected = 20.0 - 0.5 * G * t * t - extra;
-    let p = sim.world_mut().query::<&Particles>().single(sim.world()).expect("one cloth").clone();
-    let mean_y = p.position.iter().map(|x| f64::from(x.y)).sum::<f64>() / p.len() as f64;
-    let velocity = p.velocity.iter().map(|v| f64::from(v.y)).sum::<f64>() / p.len() as f64;
+    let expected = 20.0 - 0.5 * G * t * t - G / (2.0 * FPS * FPS) * f64::from(frames);
+    let (height, velocity) = height_and_speed(&mut sim);
     assert!((velocity + G * t).abs() < 1e-3, "v = {velocity} m/s, g t = {}", G * t);
-    // With every frame at 12 steps the cloth would be g (30 / 12 − Σ 1/n_k) / 7200 lower.
-    assert!((mean_y - expected).abs() < 1e-4, "y = {mean_y} m, implicit Euler with these steps {expected}");
+    assert!((height - expected).abs() < 1e-4, "y = {height} m, implicit Euler at a step a frame {expected}");
     assert!(sim.clock().time_s > t - 1e-6 && sim.clock().time_s < t + 1e-6, "the clock keeps the frames' time");
 }
 
 #[test]
-fn a_cloth_at_rest_takes_one_step_a_frame_unless_a_collider_moves() {
-    let mut resting = square(0.0, "");
+fn a_cloth_nearing_the_ground_takes_the_steps_its_speed_needs_and_falls_as_implicit_euler() {
+    // The ground 0.3 m below: the cloth comes within its reach in frame 13 (counted from
+    // 0), the last before the one in which it touches.
+    let ground = 19.7;
+    let mut sim = square(G, "", Some(ground), false);
+    let thickness = f64::from(sim.world_mut().query::<&Cloth>().single(sim.world()).expect("one cloth").thickness);
+    let (mut steps, mut near) = (Vec::new(), 0);
+    for k in 0..14 {
+        let (height, velocity) = height_and_speed(&mut sim);
+        let speed = -velocity;
+        let reach = REACH_SLACK / FPS * (speed + G / FPS);
+        let gap = height - ground - thickness;
+        let before = sim.clock().step;
+        common::run_frames(&mut sim, 1);
+        let taken = sim.clock().step - before;
+        // A gap within a part in a hundred of the reach may round either way.
+        if gap > 1.01 * reach {
+            assert_eq!(taken, 1, "frame {k}: the ground is {gap} m away, beyond the reach {reach} m");
+        } else if gap < 0.99 * reach {
+            // Rounding may tip a speed on a whole number of limits either way.
+            let wanted = steps_for(speed);
+            assert!(taken.abs_diff(wanted) <= 1, "frame {k}: {taken} steps, {speed} m/s asks for {wanted}");
+            near += 1;
+        }
+        steps.push(taken);
+    }
+    assert_eq!(near, 1, "frames within reach of the ground: {steps:?}");
+    assert!(steps[13] >= 7, "nearing the ground at 2 m/s takes several steps, not {steps:?}");
+    // Implicit Euler moves each step by h v_{n+1}, g h² / 2 more than the exact fall:
+    // over frames of n_k steps of 1/(60 n_k), g / (2 · 60²) · Σ 1 / n_k more.
+    let t = steps.len() as f64 / FPS;
+    let extra = G / (2.0 * FPS * FPS) * steps.iter().map(|&n| 1.0 / n as f64).sum::<f64>();
+    let expected = 20.0 - 0.5 * G * t * t - extra;
+    let (height, velocity) = height_and_speed(&mut sim);
+    assert!((velocity + G * t).abs() < 1e-3, "v = {velocity} m/s, g t = {}", G * t);
+    // At 12 steps a frame the cloth would be g (Σ 1/n_k − 14 / 12) / 7200, 16 mm, higher.
+    assert!((height - expected).abs() < 2e-5, "y = {height} m, implicit Euler with these steps {expected}");
+}
+
+#[test]
+fn a_cloth_at_rest_takes_one_step_a_frame_unless_a_collider_moves_near_it() {
+    let mut resting = square(0.0, "", None, false);
     assert!(steps_per_frame(&mut resting, 5).iter().all(|&n| n == 1), "nothing moves: one step a frame");
-    // A sphere 5 m below moving at 0.5 m/s: 0.5/60 m a frame, 0.092 edges, two limits.
-    let sphere = "(name: \"ball\", shape: Sphere(radius: 0.1),
-                   keyframes: [(0.0, (translation: (0.0, 15.0, 0.0))), (10.0, (translation: (5.0, 15.0, 0.0)))])";
-    let mut passing = square(0.0, sphere);
-    let wanted = (0.5 / FPS / mean_edge() / 0.05).ceil() as u64;
-    assert_eq!(wanted, 2);
-    assert!(
-        steps_per_frame(&mut passing, 5).iter().all(|&n| n == wanted),
-        "a collider moving at 0.5 m/s asks for {wanted} steps a frame"
-    );
+    // A sphere of 1 m moving at 0.5 m/s along the cloth: 0.5/60 m a frame, 0.09 edges,
+    // two limits, once it is within the reach of its speed, 2 · 0.5 / 60 m (the cloth's
+    // middle particles are 7 mm from it, less its 1 mm thickness).
+    let sphere = |below: f64| {
+        format!(
+            "(name: \"ball\", shape: Sphere(radius: 1.0),
+              keyframes: [(0.0, (translation: (0.0, {y}, 0.0))), (10.0, (translation: (5.0, {y}, 0.0)))])",
+            y = 20.0 - 1.0 - below
+        )
+    };
+    assert_eq!(steps_for(0.5), 2);
+    let mut passing = square(0.0, &sphere(0.005), None, false);
+    let steps = steps_per_frame(&mut passing, 5);
+    assert!(steps.iter().all(|&n| n == 2), "a collider 5 mm below at 0.5 m/s asks for 2 steps, not {steps:?}");
+    let mut far = square(0.0, &sphere(5.0), None, false);
+    assert!(steps_per_frame(&mut far, 5).iter().all(|&n| n == 1), "a collider 5 m away cannot be met in a frame");
+}
+
+#[test]
+fn parts_of_a_self_colliding_cloth_moving_apart_take_steps_a_cloth_moving_whole_does_not() {
+    // Half the particles at +0.5 m/s, half at −0.5: each 0.5 m/s from the mean, and a
+    // pair closes at up to twice that.
+    for (self_colliding, split, wanted) in [(true, true, steps_for(0.5)), (true, false, 1), (false, true, 1)] {
+        let mut sim = square(0.0, "", None, self_colliding);
+        let mut particles = sim.world_mut().query::<&mut Particles>().single_mut(sim.world_mut()).expect("one cloth");
+        let n = particles.len();
+        for (i, v) in particles.velocity.iter_mut().enumerate() {
+            let up = !split || i < n / 2;
+            *v = glam::Vec3::new(0.0, if up { 0.5 } else { -0.5 }, 0.0);
+        }
+        let taken = steps_per_frame(&mut sim, 1)[0];
+        assert_eq!(taken, wanted, "self-colliding {self_colliding}, split {split}");
+    }
 }
 
 #[test]

@@ -118,10 +118,11 @@ pub struct SolverDesc {
     /// Courant number α of Zheng's adaptive step for explicit methods (Z4): each step is
     /// split so that no sub-step exceeds `α Δx √(ρ/E)`, Δx the shortest current edge.
     pub cfl: Option<f32>,
-    /// How far a particle may move in one step relative to the colliders, in mean edge
-    /// lengths of its cloth [-]: when given, each frame takes the fewest steps, up to
-    /// `substeps`, that keep the fastest particle within it, so a cloth landing on a body
-    /// takes them all and a cloth at rest on it one.
+    /// How far a particle may move in one step towards what it may touch within the
+    /// frame (a collider, or a cloth that collides), in mean edge lengths of its cloth
+    /// [-]: when given, each frame takes the fewest steps, up to `substeps`, that keep
+    /// every particle within it, so a cloth landing on a body takes them all, and one at
+    /// rest on it, or falling or swinging far from anything, one.
     pub step_motion: Option<f32>,
 }
 
