@@ -77,6 +77,12 @@ fn nan_is_refused() {
 }
 
 #[test]
+fn a_cfl_limit_without_an_explicit_integrator_is_refused_with_the_default_named() {
+    let message = error("integrator: SymplecticEuler, substeps: 10", "substeps: 10, cfl: 0.5");
+    assert_mentions(&message, &["scenes/broken.ron:3:", "solver.cfl", "ImplicitEuler", "default", "SymplecticEuler"]);
+}
+
+#[test]
 fn a_zero_size_cloth_is_refused() {
     let message = error("size: (1.0, 1.0)", "size: (0.0, 1.0)");
     assert_mentions(&message, &["scenes/broken.ron:8:", "cloths[0].shape.size", "greater than 0"]);

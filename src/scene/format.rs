@@ -93,7 +93,7 @@ pub struct GustDesc {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SolverDesc {
-    /// Integration method.
+    /// Integration method; by default `ImplicitEuler`, stable on stiff fabric at any step.
     pub integrator: Integrator,
     /// Step length [s]; must divide the frame time.
     pub dt: Option<f32>,
@@ -129,7 +129,7 @@ pub struct SolverDesc {
 impl Default for SolverDesc {
     fn default() -> Self {
         Self {
-            integrator: Integrator::SymplecticEuler,
+            integrator: Integrator::ImplicitEuler,
             dt: None,
             substeps: None,
             tolerance: 1e-4,

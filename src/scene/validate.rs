@@ -133,6 +133,19 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
             format!("{radius} is outside [0, 1); the default is 0.98, 0 turns Chebyshev off"),
         ));
     }
+    let integrator = scene.solver.integrator;
+    if scene.solver.cfl.is_some() && integrator.is_implicit() {
+        // A scene written when the default was explicit would otherwise lose its limit
+        // without a word.
+        return Err(SceneError::invalid(
+            "solver.cfl",
+            format!(
+                "splits the steps of explicit methods, and {} (the default when no integrator is given) is implicit: \
+                 remove cfl, or give an explicit integrator such as SymplecticEuler",
+                integrator.name()
+            ),
+        ));
+    }
     if let Some(alpha) = scene.solver.cfl
         && positive("solver.cfl", alpha)? > 1.0
     {
