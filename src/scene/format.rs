@@ -93,7 +93,7 @@ pub struct GustDesc {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SolverDesc {
-    /// Integration method; by default `ImplicitEuler`, stable on stiff fabric at any step.
+    /// Integration method; by default `ImplicitEuler`, stable on stiff fabric up to frame-sized steps.
     pub integrator: Integrator,
     /// Step length [s]; must divide the frame time.
     pub dt: Option<f32>,
