@@ -133,26 +133,26 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
             format!("{radius} is outside [0, 1); the default is 0.98, 0 turns Chebyshev off"),
         ));
     }
-    let integrator = scene.solver.integrator;
-    if scene.solver.cfl.is_some() && integrator.is_implicit() {
-        // A scene written when the default was explicit would otherwise lose its limit
-        // without a word.
-        return Err(SceneError::invalid(
-            "solver.cfl",
-            format!(
-                "splits the steps of explicit methods, and {} (the default when no integrator is given) is implicit: \
-                 remove cfl, or give an explicit integrator such as SymplecticEuler",
-                integrator.name()
-            ),
-        ));
-    }
-    if let Some(alpha) = scene.solver.cfl
-        && positive("solver.cfl", alpha)? > 1.0
-    {
-        return Err(SceneError::invalid(
-            "solver.cfl",
-            format!("{alpha} is above 1; the CFL limit needs α ≤ 1 (0.5 is safe)"),
-        ));
+    if let Some(alpha) = scene.solver.cfl {
+        let integrator = scene.solver.integrator;
+        if integrator.is_implicit() {
+            // A scene written when the default was explicit would otherwise lose its
+            // limit without a word.
+            return Err(SceneError::invalid(
+                "solver.cfl",
+                format!(
+                    "splits the steps of explicit methods, and {} (the default when no integrator is given) is \
+                     implicit: remove cfl, or give an explicit integrator such as SymplecticEuler",
+                    integrator.name()
+                ),
+            ));
+        }
+        if positive("solver.cfl", alpha)? > 1.0 {
+            return Err(SceneError::invalid(
+                "solver.cfl",
+                format!("{alpha} is above 1; the CFL limit needs α ≤ 1 (0.5 is safe)"),
+            ));
+        }
     }
     if let Some(motion) = scene.solver.step_motion
         && positive("solver.step_motion", motion)? > 1.0
