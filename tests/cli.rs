@@ -194,6 +194,31 @@ fn each_bench_scene_measures_its_own_peak_memory() {
     assert!((after - alone).abs() <= 0.25 * alone, "fold_64: {after} bytes a particle after sphere_64, {alone} alone");
 }
 
+/// With `step_motion` a frame takes the steps its motion needs, up to `substeps`, and the
+/// bench reports the steps its timed frames took, not the most they may take: hang_32
+/// allowed 10 steps a frame touches nothing, so each frame takes one.
+#[test]
+fn bench_reports_the_steps_the_frames_took() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scenes = dir.path().join("scenes").join("bench");
+    std::fs::create_dir_all(&scenes).expect("a bench folder");
+    let hang = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bench/hang_32.ron"))
+        .expect("hang_32 is bundled");
+    let adaptive = hang.replace("substeps: 1,", "substeps: 10, step_motion: 0.25,");
+    assert_ne!(adaptive, hang, "hang_32 names its substeps");
+    std::fs::write(scenes.join("hang_32.ron"), adaptive).expect("scene written");
+    let out = dir.path().join("bench.json");
+    let output = Command::new(env!("CARGO_BIN_EXE_selvedge"))
+        .args(["bench", "--quick", "--only", "hang_32", "--out", out.to_str().expect("utf-8 path")])
+        .current_dir(dir.path())
+        .output()
+        .expect("the binary runs");
+    assert!(output.status.success(), "{}", text(&output.stderr));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).expect("report written")).expect("json");
+    assert_eq!(report["scenes"][0]["steps_per_frame"].as_f64(), Some(1.0), "{report}");
+}
+
 #[test]
 fn bench_times_the_named_scenes_and_writes_their_table_as_json() {
     let dir = tempfile::tempdir().expect("temp dir");
