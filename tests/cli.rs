@@ -5,11 +5,17 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 fn selvedge(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_selvedge"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the binary runs")
+    selvedge_in(Path::new(env!("CARGO_MANIFEST_DIR")), args)
+}
+
+/// The binary run with `args` in the working folder `dir`.
+fn selvedge_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_selvedge")).args(args).current_dir(dir).output().expect("the binary runs")
+}
+
+/// The JSON report a bench wrote to `out`.
+fn bench_report(out: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out).expect("report written")).expect("json")
 }
 
 fn text(bytes: &[u8]) -> String {
@@ -176,8 +182,7 @@ fn each_bench_scene_measures_its_own_peak_memory() {
         let out = dir.path().join(format!("{only}.json"));
         let output = selvedge(&["bench", "--quick", "--only", only, "--out", out.to_str().expect("utf-8 path")]);
         assert!(output.status.success(), "{}", text(&output.stderr));
-        let report: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&out).expect("report written")).expect("json");
+        let report = bench_report(&out);
         let scenes = report["scenes"].as_array().expect("a list of scenes");
         scenes
             .iter()
@@ -208,14 +213,10 @@ fn bench_reports_the_steps_the_frames_took() {
     assert_ne!(adaptive, hang, "hang_32 names its substeps");
     std::fs::write(scenes.join("hang_32.ron"), adaptive).expect("scene written");
     let out = dir.path().join("bench.json");
-    let output = Command::new(env!("CARGO_BIN_EXE_selvedge"))
-        .args(["bench", "--quick", "--only", "hang_32", "--out", out.to_str().expect("utf-8 path")])
-        .current_dir(dir.path())
-        .output()
-        .expect("the binary runs");
+    let output =
+        selvedge_in(dir.path(), &["bench", "--quick", "--only", "hang_32", "--out", out.to_str().expect("utf-8 path")]);
     assert!(output.status.success(), "{}", text(&output.stderr));
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&out).expect("report written")).expect("json");
+    let report = bench_report(&out);
     assert_eq!(report["scenes"][0]["steps_per_frame"].as_f64(), Some(1.0), "{report}");
 }
 
@@ -226,8 +227,7 @@ fn bench_times_the_named_scenes_and_writes_their_table_as_json() {
     let output = selvedge(&["bench", "--quick", "--only", "hang_32", "--out", out.to_str().expect("utf-8 path")]);
     assert!(output.status.success(), "{}", text(&output.stderr));
     assert!(text(&output.stdout).contains("hang_32"), "the table names the scene");
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&out).expect("report written")).expect("json");
+    let report = bench_report(&out);
     let scenes = report["scenes"].as_array().expect("a list of scenes");
     assert_eq!(scenes.len(), 1);
     let hang = &scenes[0];
