@@ -73,12 +73,7 @@ pub fn plan_frame_steps(
     let reach = cloths
         .iter()
         .map(|(cloth, particles, triangles, colliding)| {
-            let rest = &particles.rest_position;
-            let sides: f32 = triangles
-                .indices
-                .iter()
-                .map(|t| (0..3).map(|k| rest[t[k] as usize].distance(rest[t[(k + 1) % 3] as usize])).sum::<f32>())
-                .sum();
+            let sides: f32 = triangles.side_lengths(&particles.rest_position).map(|s| s.iter().sum::<f32>()).sum();
             let edge = sides / (3 * triangles.len()).max(1) as f32;
             let fastest = particles
                 .position

@@ -228,7 +228,8 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
         let self_collision = desc
             .self_collision()
             .map(|(separation, friction, layer)| {
-                let shortest = shortest_edge(&data.particles.rest_position, &data.triangles.indices);
+                let shortest =
+                    data.triangles.side_lengths(&data.particles.rest_position).flatten().fold(f32::INFINITY, f32::min);
                 if separation <= 0.0 || separation >= 0.5 * shortest {
                     return Err(SceneError::invalid(
                         format!("cloths[{index}].self_collision.separation"),
@@ -340,13 +341,4 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
     world.insert_resource(ScheduledEdits { pending });
     world.insert_resource(ProbeRequests(scene.probes.clone()));
     Ok(counts)
-}
-
-/// Length of the shortest triangle side [m].
-fn shortest_edge(positions: &[Vec3], triangles: &[[u32; 3]]) -> f32 {
-    triangles
-        .iter()
-        .flat_map(|&[a, b, c]| [(a, b), (b, c), (c, a)])
-        .map(|(p, q)| positions[p as usize].distance(positions[q as usize]))
-        .fold(f32::INFINITY, f32::min)
 }
