@@ -278,6 +278,7 @@ fn rows_of(rows: usize, mut fill: impl FnMut(usize, &mut Vec<u32>)) -> BlockPatt
         pattern.columns.extend_from_slice(&row);
         pattern.offsets.push(pattern.columns.len() as u32);
     }
+    pattern.shrink_to_fit();
     pattern
 }
 
