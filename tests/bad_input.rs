@@ -158,8 +158,22 @@ fn a_prop_that_is_a_plane_or_has_no_mass_is_refused() {
 
 #[test]
 fn block_descent_needs_sweeps_and_a_chebyshev_radius_below_one() {
-    let message = error("substeps: 10)", "substeps: 10, descent: (sweeps: 0))");
+    let solver = "integrator: SymplecticEuler, substeps: 10)";
+    let descent = |settings: &str| format!("integrator: BlockDescent, substeps: 10, descent: ({settings}))");
+    let message = error(solver, &descent("sweeps: 0"));
     assert_mentions(&message, &["scenes/broken.ron", "solver.descent.sweeps", "at least 1"]);
-    let message = error("substeps: 10)", "substeps: 10, descent: (spectral_radius: 1.2))");
+    let message = error(solver, &descent("spectral_radius: 1.2"));
     assert_mentions(&message, &["solver.descent.spectral_radius", "outside [0, 1)", "scenes/broken.ron:3:"]);
+}
+
+#[test]
+fn a_setting_of_another_integrator_is_refused_rather_than_ignored() {
+    let solver = "integrator: SymplecticEuler, substeps: 10)";
+    // With no integrator given, ImplicitEuler, which has no use for block descent's.
+    let message = error(solver, "substeps: 10, descent: (sweeps: 20))");
+    assert_mentions(&message, &["scenes/broken.ron:3:", "solver.descent", "ImplicitEuler", "integrator: BlockDescent"]);
+    let message = error(solver, "integrator: Newmark, substeps: 10, tolerance: 1e-6)");
+    assert_mentions(&message, &["solver.tolerance", "Newmark", "remove tolerance", "integrator: Rk45"]);
+    let message = error(solver, "integrator: BlockDescent, substeps: 10, theta: 0.6)");
+    assert_mentions(&message, &["solver.theta", "BlockDescent", "integrator: Newmark"]);
 }

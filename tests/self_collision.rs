@@ -112,7 +112,7 @@ fn descent_heap(bounded: bool, frames: u32) -> (f64, Vec<glam::Vec3>) {
     let mut sim = common::bundled_with("fold_heap.ron", |scene| {
         scene.solver.integrator = Integrator::BlockDescent;
         scene.solver.substeps = Some(1);
-        scene.solver.descent.contact_bounds = bounded;
+        scene.solver.descent.get_or_insert_default().contact_bounds = bounded;
     });
     let mut impacts = 0.0;
     for frame in 1..=frames {

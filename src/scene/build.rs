@@ -296,9 +296,9 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
         integrator: scene.solver.integrator,
         method: MethodSettings {
             cfl: scene.solver.cfl,
-            tolerance: scene.solver.tolerance,
+            tolerance: scene.solver.tolerance(),
             implicit: ImplicitSettings {
-                theta: scene.solver.theta,
+                theta: scene.solver.theta(),
                 rayleigh,
                 cg_tolerance: scene.solver.cg_tolerance,
                 cg_max_iterations: scene.solver.cg_max_iterations,
@@ -308,10 +308,13 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
                     Preconditioner::Multigrid => LinearSolver::Multigrid,
                 },
             },
-            descent: DescentSettings {
-                sweeps: scene.solver.descent.sweeps,
-                spectral_radius: scene.solver.descent.spectral_radius,
-                contact_bounds: scene.solver.descent.contact_bounds,
+            descent: {
+                let descent = scene.solver.descent();
+                DescentSettings {
+                    sweeps: descent.sweeps,
+                    spectral_radius: descent.spectral_radius,
+                    contact_bounds: descent.contact_bounds,
+                }
             },
         },
     });

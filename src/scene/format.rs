@@ -99,10 +99,12 @@ pub struct SolverDesc {
     pub dt: Option<f32>,
     /// Steps per frame.
     pub substeps: Option<u32>,
-    /// Relative error tolerance of `Rk45` [-].
-    pub tolerance: f32,
-    /// θ of `Newmark`, in [0.5, 1] (0.5: constant average acceleration, Bricis's choice).
-    pub theta: f32,
+    /// Relative error tolerance of `Rk45` [-] (default 1e-4; refused with another
+    /// integrator, which would ignore it).
+    pub tolerance: Option<f32>,
+    /// θ of `Newmark`, in [0.5, 1] (default 0.5: constant average acceleration, Bricis's
+    /// choice; refused with another integrator).
+    pub theta: Option<f32>,
     /// Rayleigh damping `C = αM + βK` of the implicit methods.
     pub rayleigh: Option<RayleighDesc>,
     /// Relative residual at which the implicit methods' conjugate gradients stop [-].
@@ -113,8 +115,8 @@ pub struct SolverDesc {
     pub preconditioner: Preconditioner,
     /// Newton iterations per implicit step (1: linearly implicit).
     pub newton_iterations: u32,
-    /// How `BlockDescent` solves each step.
-    pub descent: DescentDesc,
+    /// How `BlockDescent` solves each step (refused with another integrator).
+    pub descent: Option<DescentDesc>,
     /// Courant number α of Zheng's adaptive step for explicit methods (Z4): each step is
     /// split so that no sub-step exceeds `α Δx √(ρ/E)`, Δx the shortest current edge.
     pub cfl: Option<f32>,
@@ -132,17 +134,34 @@ impl Default for SolverDesc {
             integrator: Integrator::ImplicitEuler,
             dt: None,
             substeps: None,
-            tolerance: 1e-4,
-            theta: 0.5,
+            tolerance: None,
+            theta: None,
             rayleigh: None,
             cg_tolerance: 1e-4,
             cg_max_iterations: 500,
             preconditioner: Preconditioner::BlockJacobi,
             newton_iterations: 1,
-            descent: DescentDesc::default(),
+            descent: None,
             cfl: None,
             step_motion: None,
         }
+    }
+}
+
+impl SolverDesc {
+    /// `Rk45`'s tolerance, given or default.
+    pub fn tolerance(&self) -> f32 {
+        self.tolerance.unwrap_or(1e-4)
+    }
+
+    /// `Newmark`'s θ, given or default.
+    pub fn theta(&self) -> f32 {
+        self.theta.unwrap_or(0.5)
+    }
+
+    /// `BlockDescent`'s settings, given or default.
+    pub fn descent(&self) -> DescentDesc {
+        self.descent.unwrap_or_default()
     }
 }
 

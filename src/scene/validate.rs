@@ -10,6 +10,7 @@ use crate::builders::pins::PinSelection;
 use crate::collision::collider::{ColliderShape, ContactResponse, Pose, Regimes};
 use crate::components::{BendingLawDesc, MembraneDesc};
 use crate::fabrics::{BendingMeasurement, FabricDesc};
+use crate::solver::integrate::Integrator;
 use crate::solver::probes::ClothProbe;
 
 /// How a scene's time is cut into frames and steps.
@@ -97,7 +98,23 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         positive("air.gust.period_s", gust.period_s)?;
     }
     non_negative("air.area_damping", scene.air.area_damping)?;
-    let theta = finite("solver.theta", scene.solver.theta)?;
+    let integrator = scene.solver.integrator;
+    only_with("solver.theta", scene.solver.theta.is_some(), integrator, Integrator::Newmark, "Newmark's θ")?;
+    only_with(
+        "solver.tolerance",
+        scene.solver.tolerance.is_some(),
+        integrator,
+        Integrator::Rk45,
+        "Rk45's error tolerance",
+    )?;
+    only_with(
+        "solver.descent",
+        scene.solver.descent.is_some(),
+        integrator,
+        Integrator::BlockDescent,
+        "how BlockDescent solves a step",
+    )?;
+    let theta = finite("solver.theta", scene.solver.theta())?;
     if !(0.5..=1.0).contains(&theta) {
         return Err(SceneError::invalid(
             "solver.theta",
@@ -122,7 +139,7 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
     if cg >= 1.0 || scene.solver.cg_max_iterations == 0 {
         return Err(SceneError::invalid("solver.cg_tolerance", "needs a tolerance below 1 and at least one iteration"));
     }
-    let descent = &scene.solver.descent;
+    let descent = scene.solver.descent();
     if descent.sweeps == 0 {
         return Err(SceneError::invalid("solver.descent.sweeps", "must be at least 1"));
     }
@@ -134,7 +151,6 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         ));
     }
     if let Some(alpha) = scene.solver.cfl {
-        let integrator = scene.solver.integrator;
         if integrator.is_implicit() {
             // A scene written when the default was explicit would otherwise lose its
             // limit without a word.
@@ -162,7 +178,7 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
             format!("{motion} edges a step lets a landing cloth tear (0.45 tore sphere_64's); give 0.25 or less"),
         ));
     }
-    let tolerance = positive("solver.tolerance", scene.solver.tolerance)?;
+    let tolerance = positive("solver.tolerance", scene.solver.tolerance())?;
     if tolerance >= 1.0 {
         return Err(SceneError::invalid(
             "solver.tolerance",
@@ -489,6 +505,31 @@ fn check_selection(field: &str, selection: &PinSelection) -> Result<(), SceneErr
         }
     }
     Ok(())
+}
+
+/// Refuses a setting `given` for one integrator, `owner`, while the scene's is another,
+/// which would ignore it without a word: a scene switched from `Rk45` to `ImplicitEuler`
+/// would keep a tolerance that no longer controls anything.
+fn only_with(
+    field: &str,
+    given: bool,
+    integrator: Integrator,
+    owner: Integrator,
+    what: &str,
+) -> Result<(), SceneError> {
+    if !given || integrator == owner {
+        return Ok(());
+    }
+    let name = field.rsplit('.').next().unwrap_or(field);
+    Err(SceneError::invalid(
+        field,
+        format!(
+            "is {what}, which the scene's integrator, {} (the default when none is given), ignores: remove {name}, \
+             or give integrator: {}",
+            integrator.name(),
+            owner.name()
+        ),
+    ))
 }
 
 fn finite(field: &str, value: f32) -> Result<f32, SceneError> {
