@@ -10,7 +10,7 @@ use crate::collision::collider::{ColliderShape, ContactResponse, Pose};
 use crate::components::ClothMaterial;
 use crate::fabrics::FabricDesc;
 use crate::solver::descent::DescentSettings;
-use crate::solver::integrate::Integrator;
+use crate::solver::integrate::{Integrator, MethodSettings};
 use crate::solver::probes::ClothProbe;
 
 /// A whole run: world, cloths, solver, duration and outputs.
@@ -129,7 +129,9 @@ pub struct SolverDesc {
 }
 
 impl Default for SolverDesc {
+    /// The library's defaults ([`MethodSettings::default`]), with `ImplicitEuler`.
     fn default() -> Self {
+        let method = MethodSettings::default();
         Self {
             integrator: Integrator::ImplicitEuler,
             dt: None,
@@ -137,10 +139,10 @@ impl Default for SolverDesc {
             tolerance: None,
             theta: None,
             rayleigh: None,
-            cg_tolerance: 1e-4,
-            cg_max_iterations: 500,
+            cg_tolerance: method.implicit.cg_tolerance,
+            cg_max_iterations: method.implicit.cg_max_iterations,
             preconditioner: Preconditioner::BlockJacobi,
-            newton_iterations: 1,
+            newton_iterations: method.implicit.newton_iterations,
             descent: None,
             cfl: None,
             step_motion: None,
@@ -149,14 +151,14 @@ impl Default for SolverDesc {
 }
 
 impl SolverDesc {
-    /// `Rk45`'s tolerance, given or default.
+    /// `Rk45`'s tolerance, given or the library's default.
     pub fn tolerance(&self) -> f32 {
-        self.tolerance.unwrap_or(1e-4)
+        self.tolerance.unwrap_or(MethodSettings::default().tolerance)
     }
 
-    /// `Newmark`'s θ, given or default.
+    /// `Newmark`'s θ, given or the library's default.
     pub fn theta(&self) -> f32 {
-        self.theta.unwrap_or(0.5)
+        self.theta.unwrap_or(MethodSettings::default().implicit.theta)
     }
 
     /// `BlockDescent`'s settings, given or default.
