@@ -88,8 +88,7 @@ pub fn plan_frame_steps(
                         .filter_map(|(collider, [start, end])| {
                             let surface = start.velocity_at(p).length().max(end.velocity_at(p).length());
                             let gap = collider.shape.distance_to_point(&start.pose, p, true)
-                                - collider.thickness
-                                - cloth.thickness
+                                - collider.contact_thickness(cloth.thickness)
                                 - collider.response.reach();
                             (gap <= REACH_SLACK * frame_time * (speed + gained + surface)).then_some(speed + surface)
                         })

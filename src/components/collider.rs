@@ -45,6 +45,12 @@ impl Collider {
         Collider { name, shape, motion, friction, thickness, response, features }
     }
 
+    /// How far from its surface [m] it meets a cloth of contact thickness
+    /// `cloth_thickness`: its own thickness and the cloth's.
+    pub fn contact_thickness(&self, cloth_thickness: f32) -> f32 {
+        self.thickness + cloth_thickness
+    }
+
     /// The collider as the contact kernel sees it at time `t` [s] against a cloth of
     /// contact thickness `cloth_thickness` [m]; `prop` says whether it is a free prop.
     pub fn contact_body(&self, t: f32, cloth_thickness: f32, prop: bool) -> ContactBody {
@@ -52,7 +58,7 @@ impl Collider {
             shape: self.shape.clone(),
             state: self.motion.state_at(t),
             friction: self.friction,
-            thickness: self.thickness + cloth_thickness,
+            thickness: self.contact_thickness(cloth_thickness),
             response: self.response,
             prop,
         }
