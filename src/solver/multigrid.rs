@@ -215,7 +215,7 @@ impl Hierarchy {
                 coarse,
             });
         }
-        Self { fine, coarsest: current.rows(), coarsenings }
+        Self { fine: fine.with_upper(), coarsest: current.rows(), coarsenings }
     }
 
     /// Nodes per level, finest first.
@@ -368,7 +368,7 @@ fn pair_inverse(a: Operator, p: usize) -> [[Mat3; 2]; 2] {
     let mut factor = [0.0; 36];
     for bi in 0..2 {
         for bj in 0..2 {
-            let block = a.matrix.block(a.pattern, (2 * p + bi) as u32, (2 * p + bj) as u32);
+            let block = a.block((2 * p + bi) as u32, (2 * p + bj) as u32);
             set_dense(&mut factor, 6, bi, bj, block);
         }
     }
@@ -439,8 +439,8 @@ fn cholesky_solve(f: &[f64], y: &mut [f64]) {
 #[derive(Debug, Clone, Default)]
 pub struct Multigrid {
     /// The finest level's matrix: the system over the hierarchy's finest pattern
-    /// ([`lump`]).
-    fine: BlockMatrix,
+    /// ([`lump`]), stored on and above its diagonal as the system is.
+    fine: SymmetricBlockMatrix,
     /// The diagonal shift of each block of the system that [`lump`] moves, by storage
     /// slot.
     shifts: Vec<f32>,
@@ -575,8 +575,19 @@ fn symmetric_eigen(m: Mat3) -> (Mat3, Vec3) {
 #[derive(Clone, Copy)]
 struct Operator<'a> {
     pattern: &'a BlockPattern,
-    matrix: &'a BlockMatrix,
+    matrix: Matrix<'a>,
     filter: Option<&'a Filters>,
+}
+
+/// A level's matrix. The finest level's is symmetric and stored on and above its
+/// diagonal, as the system is: its products are most of a V-cycle's time and it is
+/// lumped from the system at every step, and stored in full it was the largest matrix
+/// of the levels. The coarse levels' Galerkin products are stored in full, a product
+/// a gather over rows.
+#[derive(Clone, Copy)]
+enum Matrix<'a> {
+    Full(&'a BlockMatrix),
+    Symmetric(&'a SymmetricBlockMatrix),
 }
 
 impl Operator<'_> {
@@ -593,19 +604,60 @@ impl Operator<'_> {
     /// `(S A_ii S + I − S)⁻¹ S` for node `i` (with a one on any empty diagonal entry), zero
     /// where that is singular.
     fn inverse_diagonal(&self, i: usize) -> Mat3 {
-        filtered_inverse(self.filter(i), self.matrix.block(self.pattern, i as u32, i as u32))
+        filtered_inverse(self.filter(i), self.block(i as u32, i as u32))
     }
 
-    /// `out = S (r − A z)`.
-    fn residual(&self, r: &[Vec3], z: &[Vec3], out: &mut [Vec3]) {
-        let (pattern, matrix) = (self.pattern, self.matrix);
-        out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, out)| {
-            let mut sum = r[i];
-            for k in pattern.slots(i) {
-                sum -= matrix.blocks[k] * z[pattern.columns[k] as usize];
+    /// Block `(row, column)` of the matrix, zero where the pattern has none.
+    fn block(&self, row: u32, column: u32) -> Mat3 {
+        match self.matrix {
+            Matrix::Full(m) => m.block(self.pattern, row, column),
+            Matrix::Symmetric(m) => m.block(self.pattern, row, column),
+        }
+    }
+
+    /// Calls `visit(column, block)` for every block of row `i`, columns ascending.
+    #[inline]
+    fn for_row(&self, i: usize, mut visit: impl FnMut(u32, Mat3)) {
+        match self.matrix {
+            Matrix::Full(m) => {
+                for k in self.pattern.slots(i) {
+                    visit(self.pattern.columns[k], m.blocks[k]);
+                }
             }
-            *out = self.filtered(i, sum);
-        });
+            Matrix::Symmetric(m) => m.for_row(self.pattern, i, |j, block, _| visit(j, block)),
+        }
+    }
+
+    /// `out = A x`.
+    fn multiply(&self, x: &[Vec3], out: &mut [Vec3]) {
+        match self.matrix {
+            Matrix::Full(m) => m.multiply(self.pattern, x, out),
+            Matrix::Symmetric(m) => m.multiply(self.pattern, x, out),
+        }
+    }
+
+    /// `out = S (r − A z)`: a gather over rows of a full matrix; the product, each stored
+    /// block read once, then the difference, for a symmetric one.
+    fn residual(&self, r: &[Vec3], z: &[Vec3], out: &mut [Vec3]) {
+        let pattern = self.pattern;
+        match self.matrix {
+            Matrix::Full(matrix) => {
+                out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, out)| {
+                    let mut sum = r[i];
+                    for k in pattern.slots(i) {
+                        sum -= matrix.blocks[k] * z[pattern.columns[k] as usize];
+                    }
+                    *out = self.filtered(i, sum);
+                });
+            }
+            Matrix::Symmetric(matrix) => {
+                matrix.multiply(pattern, z, out);
+                out.par_iter_mut()
+                    .with_min_len(PARALLEL_MIN_LEN)
+                    .enumerate()
+                    .for_each(|(i, out)| *out = self.filtered(i, r[i] - *out));
+            }
+        }
     }
 }
 
@@ -642,7 +694,7 @@ fn lump(
     system: &SymmetricBlockMatrix,
     fine: &BlockPattern,
     shifts: &mut Vec<f32>,
-    out: &mut BlockMatrix,
+    out: &mut SymmetricBlockMatrix,
 ) {
     shifts.resize(system.blocks.len(), 0.0);
     pattern.fill_upper_rows(shifts, &|i, row, shifts| {
@@ -657,19 +709,22 @@ fn lump(
         }
     });
     let shifts = &*shifts;
-    fill_rows(fine, 1, out, |i, columns, blocks| {
-        let (mut at, mut moved) = (0, Mat3::ZERO);
+    out.reset(fine);
+    fine.fill_upper_rows(&mut out.blocks, &|i, row, blocks| {
+        // Row `i` of `fine` in full, its blocks from the diagonal on stored from `below`.
+        let (columns, below, mut at, mut moved) = (fine.row(i), row.below.len(), 0, Mat3::ZERO);
         system.for_row(pattern, i, |column, block, slot| {
             while at < columns.len() && columns[at] < column {
                 at += 1;
             }
             match columns.get(at) == Some(&column) {
-                true => blocks[at] = block,
+                true if at >= below => blocks[at - below] = block,
+                true => {}
                 false => moved += symmetric_part(block) + Mat3::from_diagonal(Vec3::splat(shifts[slot])),
             }
         });
-        let diagonal = columns.binary_search(&(i as u32)).expect("every row has its diagonal");
-        blocks[diagonal] += moved;
+        // The diagonal block is the first stored.
+        blocks[0] += moved;
     });
 }
 
@@ -791,7 +846,7 @@ impl Level {
             if norm == 0.0 {
                 break;
             }
-            a.matrix.multiply(a.pattern, &self.dominant, &mut self.scratch);
+            a.multiply(&self.dominant, &mut self.scratch);
             let (inverse, scratch) = (&self.inverse, &self.scratch);
             self.dominant
                 .par_iter_mut()
@@ -865,14 +920,14 @@ impl Level {
         // Row `i` of `A S P₀` into `pushed`, the blocks of `columns`.
         let push = |i: usize, columns: &[u32], pushed: &mut [Mat3]| {
             pushed.fill(Mat3::ZERO);
-            for k in a.pattern.slots(i) {
-                let node = a.pattern.columns[k] as usize;
+            a.for_row(i, |node, a_ik| {
+                let node = node as usize;
                 let translation = 2 * rigid.aggregate(node);
-                let Ok(at) = columns.binary_search(&translation) else { continue };
+                let Ok(at) = columns.binary_search(&translation) else { return };
                 for (out, block) in pushed[at..at + 2].iter_mut().zip(tentative(node)) {
-                    *out += a.matrix.blocks[k] * block;
+                    *out += a_ik * block;
                 }
-            }
+            });
         };
         fill_rows(&coarsening.prolongation, size, prolongation, |first, columns, blocks| {
             for (r, row) in blocks.chunks_mut(columns.len()).enumerate() {
@@ -914,13 +969,12 @@ impl Level {
             let blocks = &mut blocks[..ap.slots_of(rows.clone()).len()];
             blocks.fill(Mat3::ZERO);
             ap.fill_row_range(1, rows, blocks, &|i, columns, blocks| {
-                for k in a.pattern.slots(i) {
-                    let (block, node) = (a.matrix.blocks[k], a.pattern.columns[k] as usize);
+                a.for_row(i, |node, block| {
                     let mut at = 0;
-                    for s in p.slots(node) {
+                    for s in p.slots(node as usize) {
                         add_at(columns, blocks, &mut at, p.columns[s], block * prolongation[s]);
                     }
-                }
+                });
             });
         };
         out.reset(coarse);
@@ -1009,9 +1063,9 @@ impl Multigrid {
     ///
     /// The finest level is not the system itself but the system over the hierarchy's
     /// pattern, the couplings of the bending across an edge lumped onto the diagonal
-    /// ([`lump`]): a third of the blocks (7 of 19 a row on a regular sheet), for each of
-    /// the cycle's smoothing products and for the Galerkin product, at a frame-sized step
-    /// where the bending is some 10⁻⁴ of the membrane's stiffness.
+    /// ([`lump`]): a third of the blocks (7 of 19 a row on a regular sheet, 4 of 10
+    /// stored), for each of the cycle's smoothing products and for the Galerkin product,
+    /// at a frame-sized step where the bending is some 10⁻⁴ of the membrane's stiffness.
     pub fn prepare(
         &mut self,
         hierarchy: &Hierarchy,
@@ -1033,7 +1087,8 @@ impl Multigrid {
         let current = !self.rebuild && built_for(&self.levels);
         match self.levels.first_mut() {
             Some(finest) if current => {
-                finest.smoother(Operator { pattern, matrix: &self.fine, filter: Some(filter) }, false);
+                finest
+                    .smoother(Operator { pattern, matrix: Matrix::Symmetric(&self.fine), filter: Some(filter) }, false);
             }
             // Stale, another hierarchy, or a single level (the system is the coarsest).
             _ => self.setup(hierarchy, filter, positions),
@@ -1073,12 +1128,16 @@ impl Multigrid {
         let depth = hierarchy.coarsenings.len();
         self.levels.resize_with(depth, Level::default);
         self.matrices.resize_with(depth, BlockMatrix::default);
-        let finest = Operator { pattern: &hierarchy.fine, matrix: &self.fine, filter: Some(filter) };
+        let finest = Operator { pattern: &hierarchy.fine, matrix: Matrix::Symmetric(&self.fine), filter: Some(filter) };
         for (l, coarsening) in hierarchy.coarsenings.iter().enumerate() {
             let (above, below) = self.matrices.split_at_mut(l);
             let a = match l {
                 0 => finest,
-                _ => Operator { pattern: &hierarchy.coarsenings[l - 1].coarse, matrix: &above[l - 1], filter: None },
+                _ => Operator {
+                    pattern: &hierarchy.coarsenings[l - 1].coarse,
+                    matrix: Matrix::Full(&above[l - 1]),
+                    filter: None,
+                },
             };
             let (finer, level) = self.levels.split_at_mut(l);
             let level = &mut level[0];
@@ -1098,7 +1157,7 @@ impl Multigrid {
             0 => finest,
             _ => Operator {
                 pattern: &hierarchy.coarsenings[depth - 1].coarse,
-                matrix: &self.matrices[depth - 1],
+                matrix: Matrix::Full(&self.matrices[depth - 1]),
                 filter: None,
             },
         };
@@ -1108,7 +1167,7 @@ impl Multigrid {
     /// One symmetric V-cycle on the finest level's residual `r` (filtered), giving the
     /// correction `z` (within the filter).
     pub fn apply(&mut self, hierarchy: &Hierarchy, filter: &Filters, r: &[Vec3], z: &mut [Vec3]) {
-        let finest = Operator { pattern: &hierarchy.fine, matrix: &self.fine, filter: Some(filter) };
+        let finest = Operator { pattern: &hierarchy.fine, matrix: Matrix::Symmetric(&self.fine), filter: Some(filter) };
         cycle(&mut self.levels, &hierarchy.coarsenings, &self.matrices, &mut self.coarsest, finest, r, z);
     }
 }
@@ -1139,7 +1198,7 @@ fn cycle(
             .range(c)
             .fold(Vec3::ZERO, |sum, k| sum + blocks[restriction.items[k] as usize].transpose() * t[rows[k] as usize]);
     });
-    let below = Operator { pattern: &coarsening.coarse, matrix: &matrices[0], filter: None };
+    let below = Operator { pattern: &coarsening.coarse, matrix: Matrix::Full(&matrices[0]), filter: None };
     cycle(
         deeper,
         &coarsenings[1..],
@@ -1179,14 +1238,14 @@ impl CoarsestSolver {
         self.unknowns.resize(m, 0.0);
         for i in 0..a.pattern.rows() {
             let si = a.filter(i);
-            for k in a.pattern.slots(i) {
-                let j = a.pattern.columns[k] as usize;
-                let mut block = si * a.matrix.blocks[k] * a.filter(j);
+            a.for_row(i, |j, a_ij| {
+                let j = j as usize;
+                let mut block = si * a_ij * a.filter(j);
                 if i == j {
                     block += Mat3::IDENTITY - si;
                 }
                 set_dense(&mut self.factor, m, i, j, block);
-            }
+            });
         }
         cholesky(&mut self.factor, m);
     }
