@@ -124,7 +124,7 @@ const REBUILD_RUN: u32 = 32;
 pub struct Hierarchy {
     /// The finest level's pattern: the couplings of the particles that share a triangle or
     /// a spring, which the system's pattern holds with the bending's, across an edge, as
-    /// well (see [`Multigrid::prepare`]).
+    /// well (see [`Multigrid::prepare`]); laid out for a [`SymmetricBlockMatrix`].
     fine: BlockPattern,
     /// From the finest level down, each coarsening of the level above.
     coarsenings: Vec<Coarsening>,
@@ -590,6 +590,12 @@ enum Matrix<'a> {
     Symmetric(&'a SymmetricBlockMatrix),
 }
 
+/// The finest level's operator: `fine`, the lumped system, over the hierarchy's finest
+/// pattern, within the constraint filter.
+fn finest_operator<'a>(hierarchy: &'a Hierarchy, fine: &'a SymmetricBlockMatrix, filter: &'a Filters) -> Operator<'a> {
+    Operator { pattern: &hierarchy.fine, matrix: Matrix::Symmetric(fine), filter: Some(filter) }
+}
+
 impl Operator<'_> {
     fn filter(&self, i: usize) -> Mat3 {
         self.filter.map_or(Mat3::IDENTITY, |f| f.block(i))
@@ -711,7 +717,8 @@ fn lump(
     let shifts = &*shifts;
     out.reset(fine);
     fine.fill_upper_rows(&mut out.blocks, &|i, row, blocks| {
-        // Row `i` of `fine` in full, its blocks from the diagonal on stored from `below`.
+        // Row `i` of `fine` in full; its blocks from the diagonal on, those stored, begin
+        // at `below`.
         let (columns, below, mut at, mut moved) = (fine.row(i), row.below.len(), 0, Mat3::ZERO);
         system.for_row(pattern, i, |column, block, slot| {
             while at < columns.len() && columns[at] < column {
@@ -1087,8 +1094,7 @@ impl Multigrid {
         let current = !self.rebuild && built_for(&self.levels);
         match self.levels.first_mut() {
             Some(finest) if current => {
-                finest
-                    .smoother(Operator { pattern, matrix: Matrix::Symmetric(&self.fine), filter: Some(filter) }, false);
+                finest.smoother(finest_operator(hierarchy, &self.fine, filter), false);
             }
             // Stale, another hierarchy, or a single level (the system is the coarsest).
             _ => self.setup(hierarchy, filter, positions),
@@ -1128,7 +1134,7 @@ impl Multigrid {
         let depth = hierarchy.coarsenings.len();
         self.levels.resize_with(depth, Level::default);
         self.matrices.resize_with(depth, BlockMatrix::default);
-        let finest = Operator { pattern: &hierarchy.fine, matrix: Matrix::Symmetric(&self.fine), filter: Some(filter) };
+        let finest = finest_operator(hierarchy, &self.fine, filter);
         for (l, coarsening) in hierarchy.coarsenings.iter().enumerate() {
             let (above, below) = self.matrices.split_at_mut(l);
             let a = match l {
@@ -1167,7 +1173,7 @@ impl Multigrid {
     /// One symmetric V-cycle on the finest level's residual `r` (filtered), giving the
     /// correction `z` (within the filter).
     pub fn apply(&mut self, hierarchy: &Hierarchy, filter: &Filters, r: &[Vec3], z: &mut [Vec3]) {
-        let finest = Operator { pattern: &hierarchy.fine, matrix: Matrix::Symmetric(&self.fine), filter: Some(filter) };
+        let finest = finest_operator(hierarchy, &self.fine, filter);
         cycle(&mut self.levels, &hierarchy.coarsenings, &self.matrices, &mut self.coarsest, finest, r, z);
     }
 }
