@@ -26,7 +26,6 @@ use crate::resources::{
     AdaptiveSteps, AirSettings, ClothContacts, DivergenceLimit, EditAction, Gravity, HealthReport, IntegratorStats,
     ProbeRequests, Probes, PropWorld, ScheduledEdit, ScheduledEdits, SimClock, SolverSettings, StepSettings,
 };
-use crate::solver::descent::DescentSettings;
 use crate::solver::forces::{Air, Gust};
 use crate::solver::implicit::{ImplicitSettings, LinearSolver, Rayleigh};
 use crate::solver::integrate::MethodSettings;
@@ -308,14 +307,7 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
                     Preconditioner::Multigrid => LinearSolver::Multigrid,
                 },
             },
-            descent: {
-                let descent = scene.solver.descent();
-                DescentSettings {
-                    sweeps: descent.sweeps,
-                    spectral_radius: descent.spectral_radius,
-                    contact_bounds: descent.contact_bounds,
-                }
-            },
+            descent: scene.solver.descent().into(),
         },
     });
     spawn_colliders(world, scene, base_dir)?;

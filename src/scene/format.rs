@@ -203,6 +203,13 @@ impl Default for DescentDesc {
     }
 }
 
+/// The solver's settings a scene's [`DescentDesc`] gives, field for field.
+impl From<DescentDesc> for DescentSettings {
+    fn from(desc: DescentDesc) -> Self {
+        Self { sweeps: desc.sweeps, spectral_radius: desc.spectral_radius, contact_bounds: desc.contact_bounds }
+    }
+}
+
 /// Rayleigh damping, by its coefficients or by two frequencies to damp critically.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub enum RayleighDesc {
