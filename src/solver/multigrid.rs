@@ -169,7 +169,7 @@ impl Hierarchy {
             let paired = !coarsenings.is_empty();
             let point = |k: u32| if paired { k / 2 } else { k };
             let (aggregate, count) = if paired {
-                aggregate(&rows_of(current.rows() / 2, |p, row| {
+                aggregate(&BlockPattern::from_rows(current.rows() / 2, |p, row| {
                     row.extend(current.row(2 * p).iter().chain(current.row(2 * p + 1)).map(|&k| point(k)));
                 }))
             } else {
@@ -183,13 +183,13 @@ impl Hierarchy {
                 members[a as usize] += 1;
             }
             let count = 2 * count;
-            let prolongation = rows_of(current.rows(), |i, row| {
+            let prolongation = BlockPattern::from_rows(current.rows(), |i, row| {
                 for &k in current.row(i) {
                     let c = 2 * aggregate[point(k) as usize];
                     row.extend([c, c + 1]);
                 }
             });
-            let product = rows_of(current.rows(), |i, row| {
+            let product = BlockPattern::from_rows(current.rows(), |i, row| {
                 for &k in current.row(i) {
                     row.extend_from_slice(prolongation.row(k as usize));
                 }
@@ -198,7 +198,7 @@ impl Hierarchy {
             let restriction = Csr::from_items(count, &slot_columns);
             let restriction_rows: Vec<u32> =
                 restriction.items.iter().map(|&s| prolongation.row_of(s as usize) as u32).collect();
-            let coarse = rows_of(count, |c, row| {
+            let coarse = BlockPattern::from_rows(count, |c, row| {
                 for &fine in &restriction_rows[restriction.range(c)] {
                     row.extend_from_slice(product.row(fine as usize));
                 }
@@ -263,23 +263,6 @@ fn aggregate(pattern: &BlockPattern) -> (Vec<u32>, usize) {
         }
     }
     (aggregate, count as usize)
-}
-
-/// A pattern of `rows` rows, row `i` the sorted distinct columns that `fill(i, row)`
-/// pushes.
-fn rows_of(rows: usize, mut fill: impl FnMut(usize, &mut Vec<u32>)) -> BlockPattern {
-    let mut pattern = BlockPattern { offsets: vec![0], ..BlockPattern::default() };
-    let mut row = Vec::new();
-    for i in 0..rows {
-        row.clear();
-        fill(i, &mut row);
-        row.sort_unstable();
-        row.dedup();
-        pattern.columns.extend_from_slice(&row);
-        pattern.offsets.push(pattern.columns.len() as u32);
-    }
-    pattern.shrink_to_fit();
-    pattern
 }
 
 /// One level's numbers for the current system: its smoother and its prolongator from the
@@ -647,12 +630,10 @@ impl Operator<'_> {
     fn residual(&self, r: &[Vec3], z: &[Vec3], out: &mut [Vec3]) {
         let pattern = self.pattern;
         match self.matrix {
-            Matrix::Full(matrix) => {
+            Matrix::Full(_) => {
                 out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, out)| {
                     let mut sum = r[i];
-                    for k in pattern.slots(i) {
-                        sum -= matrix.blocks[k] * z[pattern.columns[k] as usize];
-                    }
+                    self.for_row(i, |j, block| sum -= block * z[j as usize]);
                     *out = self.filtered(i, sum);
                 });
             }
