@@ -438,10 +438,11 @@ fn cholesky_solve(f: &[f64], y: &mut [f64]) {
 /// round-off too. On a sheet held to a tilted plane those pivots fell to 2 · 10⁻⁸ to
 /// 1.5 · 10⁻⁶ of their diagonals, while real ones (the hang bench scenes, the coarsest
 /// levels included) stay above 10⁻²; on sphere_64's ground the turns' diagonals were
-/// 10⁻¹⁵ of the translations'. At 10⁻⁹ they were kept, and a pair's inverse was no inverse (`D D⁺ D`
-/// missed `D` by 7 times its norm), indefinite in single precision, and the V-cycle with
-/// it: sphere_64 with multigrid at its 10 steps a frame ran 210 solves to the iteration
-/// cap, 131 708 iterations in all against 23 064 with this bound, none capped.
+/// 10⁻¹⁵ of the translations'. At 10⁻⁹ they were kept, and a pair's inverse was no
+/// inverse (`D D⁺ D` missed `D` by 7 times its norm), indefinite in single precision, and
+/// the V-cycle with it: sphere_64 with multigrid at its 10 steps a frame ran 210 solves
+/// to the iteration cap, 131 708 iterations in all against 23 064 with this bound, none
+/// capped.
 const CANCELLED: f64 = 1e-4;
 
 /// The numbers of a [`Hierarchy`], made ready for each system by [`Multigrid::prepare`]
@@ -1504,7 +1505,35 @@ mod tests {
         // whose normal is no axis, so the aggregates' translations along the normal and
         // their turns out of the plane are filtered to the filter's round-off, not to zero.
         let turned = Mat3::from_euler(glam::EulerRot::XYZ, 0.4, 0.3, 0.2);
-        held_to_a_plane_is_positive(turned * Vec3::Z, |p| turned * grid_position(48, p));
+        let (normal, position) = (turned * Vec3::Z, |p| turned * grid_position(48, p));
+        let (pattern, system) = sheet_at(48, 1.0, 1.0e4, position);
+        let hierarchy = Hierarchy::build(&pattern, pattern.clone());
+        let n = pattern.rows();
+        let mut filter = Filters::free(n);
+        for i in 0..n {
+            filter.constrain(i, Mat3::IDENTITY - outer(normal, normal));
+        }
+        let positions: Vec<Vec3> = (0..n as u32).map(position).collect();
+        let mut multigrid = Multigrid::default();
+        multigrid.prepare(&hierarchy, &pattern, &system, &filter, &positions);
+        // Each pair's inverse in the first paired level's smoother.
+        let coarse = Operator {
+            pattern: &hierarchy.coarsenings[0].coarse,
+            matrix: Matrix::Full(&multigrid.matrices[0]),
+            filter: None,
+        };
+        for p in 0..coarse.pattern.rows() / 2 {
+            assert_generalised_inverse(&pair_block(coarse, p), &pair_inverse(coarse, p));
+        }
+        for seed in 0..16 {
+            let r = probe(&filter, seed);
+            let mut z = vec![Vec3::ZERO; n];
+            multigrid.apply(&hierarchy, &filter, &r, &mut z);
+            let (rz, rr, zz) = (dot(&r, &z), dot(&r, &r), dot(&z, &z));
+            assert!(rz > 0.0, "r·M⁻¹r = {rz} for probe {seed}");
+            // Nothing amplified: the cycle is near A⁻¹ ≤ I / m (m = 1).
+            assert!(zz.sqrt() <= 2.0 * rr.sqrt(), "|M⁻¹r| = {} for |r| = {}", zz.sqrt(), rr.sqrt());
+        }
     }
 
     #[test]
@@ -1543,38 +1572,5 @@ mod tests {
         let inverse_again = error(&product(&product(&inverse, block), &inverse), &inverse);
         assert!(block_again <= 1e-4, "|D D⁺ D − D| = {block_again:e} |D|");
         assert!(inverse_again <= 1e-4, "|D⁺ D D⁺ − D⁺| = {inverse_again:e} |D⁺|");
-    }
-
-    /// Asserts, for a sheet at `position` held to the plane of `normal`, that each pair's
-    /// inverse in the first paired level's smoother is a generalised inverse of its block,
-    /// and that the V-cycle is positive and amplifies nothing.
-    fn held_to_a_plane_is_positive(normal: Vec3, position: impl Fn(u32) -> Vec3) {
-        let (pattern, system) = sheet_at(48, 1.0, 1.0e4, &position);
-        let hierarchy = Hierarchy::build(&pattern, pattern.clone());
-        let n = pattern.rows();
-        let mut filter = Filters::free(n);
-        for i in 0..n {
-            filter.constrain(i, Mat3::IDENTITY - outer(normal, normal));
-        }
-        let positions: Vec<Vec3> = (0..n as u32).map(position).collect();
-        let mut multigrid = Multigrid::default();
-        multigrid.prepare(&hierarchy, &pattern, &system, &filter, &positions);
-        let coarse = Operator {
-            pattern: &hierarchy.coarsenings[0].coarse,
-            matrix: Matrix::Full(&multigrid.matrices[0]),
-            filter: None,
-        };
-        for p in 0..coarse.pattern.rows() / 2 {
-            assert_generalised_inverse(&pair_block(coarse, p), &pair_inverse(coarse, p));
-        }
-        for seed in 0..16 {
-            let r = probe(&filter, seed);
-            let mut z = vec![Vec3::ZERO; n];
-            multigrid.apply(&hierarchy, &filter, &r, &mut z);
-            let (rz, rr, zz) = (dot(&r, &z), dot(&r, &r), dot(&z, &z));
-            assert!(rz > 0.0, "r·M⁻¹r = {rz} for probe {seed}");
-            // The cycle is near A⁻¹ ≤ I / m (m = 1).
-            assert!(zz.sqrt() <= 2.0 * rr.sqrt(), "|M⁻¹r| = {} for |r| = {}", zz.sqrt(), rr.sqrt());
-        }
     }
 }
