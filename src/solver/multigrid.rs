@@ -607,6 +607,12 @@ fn finest_operator<'a>(hierarchy: &'a Hierarchy, fine: &'a SymmetricBlockMatrix,
     Operator { pattern: &hierarchy.fine, matrix: Matrix::Symmetric(fine), filter: Some(filter) }
 }
 
+/// A coarse level's operator: its Galerkin `matrix` over the `coarse` pattern, which no
+/// filter restricts (the finest level's is in the prolongator).
+fn coarse_operator<'a>(coarse: &'a BlockPattern, matrix: &'a BlockMatrix) -> Operator<'a> {
+    Operator { pattern: coarse, matrix: Matrix::Full(matrix), filter: None }
+}
+
 impl Operator<'_> {
     fn filter(&self, i: usize) -> Mat3 {
         self.filter.map_or(Mat3::IDENTITY, |f| f.block(i))
@@ -1148,11 +1154,7 @@ impl Multigrid {
             let (above, below) = self.matrices.split_at_mut(l);
             let a = match l {
                 0 => finest,
-                _ => Operator {
-                    pattern: &hierarchy.coarsenings[l - 1].coarse,
-                    matrix: Matrix::Full(&above[l - 1]),
-                    filter: None,
-                },
+                _ => coarse_operator(&hierarchy.coarsenings[l - 1].coarse, &above[l - 1]),
             };
             let (finer, level) = self.levels.split_at_mut(l);
             let level = &mut level[0];
@@ -1170,11 +1172,7 @@ impl Multigrid {
         }
         let coarsest = match depth {
             0 => finest,
-            _ => Operator {
-                pattern: &hierarchy.coarsenings[depth - 1].coarse,
-                matrix: Matrix::Full(&self.matrices[depth - 1]),
-                filter: None,
-            },
+            _ => coarse_operator(&hierarchy.coarsenings[depth - 1].coarse, &self.matrices[depth - 1]),
         };
         self.coarsest.factorize(coarsest);
     }
@@ -1213,7 +1211,7 @@ fn cycle(
             .range(c)
             .fold(Vec3::ZERO, |sum, k| sum + blocks[restriction.items[k] as usize].transpose() * t[rows[k] as usize]);
     });
-    let below = Operator { pattern: &coarsening.coarse, matrix: Matrix::Full(&matrices[0]), filter: None };
+    let below = coarse_operator(&coarsening.coarse, &matrices[0]);
     cycle(
         deeper,
         &coarsenings[1..],
@@ -1517,11 +1515,7 @@ mod tests {
         let mut multigrid = Multigrid::default();
         multigrid.prepare(&hierarchy, &pattern, &system, &filter, &positions);
         // Each pair's inverse in the first paired level's smoother.
-        let coarse = Operator {
-            pattern: &hierarchy.coarsenings[0].coarse,
-            matrix: Matrix::Full(&multigrid.matrices[0]),
-            filter: None,
-        };
+        let coarse = coarse_operator(&hierarchy.coarsenings[0].coarse, &multigrid.matrices[0]);
         for p in 0..coarse.pattern.rows() / 2 {
             assert_generalised_inverse(&pair_block(coarse, p), &pair_inverse(coarse, p));
         }
