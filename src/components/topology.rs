@@ -6,7 +6,7 @@ use glam::Vec3;
 use super::{BendingHinges, MembraneTriangles, Springs, Triangles};
 use crate::collision::self_contact::ContactMesh;
 use crate::solver::descent::Colouring;
-use crate::solver::elements::BlockPattern;
+use crate::solver::elements::{BlockPattern, ElementPositions};
 use crate::solver::forces::ForceScratch;
 use crate::solver::implicit::VelocityConstraint;
 use crate::solver::integrate::IntegratorWorkspace;
@@ -89,12 +89,12 @@ pub struct ClothTopology {
     pub pattern: BlockPattern,
     /// Where each spring's local blocks go in the pattern, as positions within their rows
     /// ([`BlockPattern::upper_positions`]).
-    pub spring_positions: Vec<[u16; 3]>,
+    pub spring_positions: ElementPositions<3>,
     /// Where each bending face's local blocks go (and, through its `corners`, each of its
     /// hinges': the exact Jacobian's hinge blocks are among a face's).
-    pub face_positions: Vec<[u16; 21]>,
+    pub face_positions: ElementPositions<21>,
     /// Where each membrane triangle's local blocks go.
-    pub membrane_positions: Vec<[u16; 6]>,
+    pub membrane_positions: ElementPositions<6>,
     /// The particles in groups that share no element, for block descent's parallel sweeps.
     pub colouring: Colouring,
     /// The particles grouped level by level, for the multigrid preconditioner.
@@ -141,9 +141,9 @@ impl ClothTopology {
                 &hinges.faces.iter().map(|f| f.hinges).collect::<Vec<_>>(),
             ),
             particle_membranes: Csr::from_corners(count, &membranes.indices),
-            spring_positions: springs.pairs.iter().map(|&p| pattern.upper_positions(p)).collect(),
-            face_positions: hinges.faces.iter().map(|f| pattern.upper_positions(f.vertices)).collect(),
-            membrane_positions: membranes.indices.iter().map(|&t| pattern.upper_positions(t)).collect(),
+            spring_positions: ElementPositions::new(&pattern, springs.pairs.iter().copied()),
+            face_positions: ElementPositions::new(&pattern, hinges.faces.iter().map(|f| f.vertices)),
+            membrane_positions: ElementPositions::new(&pattern, membranes.indices.iter().copied()),
             colouring: Colouring::greedy(&pattern),
             hierarchy: Hierarchy::build(
                 &pattern,

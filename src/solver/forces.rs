@@ -482,7 +482,7 @@ impl ForceModel<'_> {
                 matrix,
                 pattern,
                 (bounds, &row_parts.springs),
-                |s| spring_positions[s],
+                |s| spring_positions.get(s),
                 |s| pairs[s],
                 |s| {
                     let k = derivative(s, pairs[s].map(|p| x[p as usize]));
@@ -504,7 +504,7 @@ impl ForceModel<'_> {
             dfdx,
             pattern,
             (bounds, &row_parts.faces),
-            |f| face_positions[f],
+            |f| face_positions.get(f),
             face_stencil,
             |f| bending.face_jacobian(f, hinge_gradient, hinge_delta),
         );
@@ -512,7 +512,7 @@ impl ForceModel<'_> {
             // A hinge's blocks are among those of a face beside it (`corners` says where).
             let hinge_positions = |h: usize| {
                 let side = topology.hinge_faces.row(h)[0] as usize;
-                let (positions, corners) = (&face_positions[side / 3], faces[side / 3].corners[side % 3]);
+                let (positions, corners) = (face_positions.get(side / 3), faces[side / 3].corners[side % 3]);
                 upper_map::<4, 10, _>(|a, b| {
                     positions[upper_pair::<6>(usize::from(corners[a]), usize::from(corners[b]))]
                 })
@@ -525,7 +525,7 @@ impl ForceModel<'_> {
         }
         let material = &self.membranes.material;
         let triangles = |m: usize| self.membranes.indices[m];
-        let membrane_positions = |m: usize| topology.membrane_positions[m];
+        let membrane_positions = |m: usize| topology.membrane_positions.get(m);
         add_elements(dfdx, pattern, (bounds, &row_parts.membranes), membrane_positions, triangles, |m| {
             let corners = triangles(m).map(|p| x[p as usize]);
             self.membranes.elements[m].position_jacobian(material, corners, definite)

@@ -318,6 +318,45 @@ fn split_rows<T: Send>(
     );
 }
 
+/// Where each element's local blocks go in a [`SymmetricBlockMatrix`]: per element, its
+/// [`BlockPattern::upper_positions`], one byte each where no row holds 256 blocks from its
+/// diagonal on (a cloth's rows hold a few dozen), else two. A 256² sheet's bending faces
+/// and membranes kept 54 bytes a particle of positions in two bytes each.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ElementPositions<const M: usize> {
+    /// One byte a position: every row holds at most 256 blocks from its diagonal on.
+    Narrow(Vec<[u8; M]>),
+    /// Two bytes a position.
+    Wide(Vec<[u16; M]>),
+}
+
+impl<const M: usize> Default for ElementPositions<M> {
+    fn default() -> Self {
+        Self::Narrow(Vec::new())
+    }
+}
+
+impl<const M: usize> ElementPositions<M> {
+    /// The positions of the `stencils`' blocks in `pattern`.
+    pub fn new<const N: usize>(pattern: &BlockPattern, stencils: impl ExactSizeIterator<Item = [u32; N]>) -> Self {
+        let widest = pattern.upper.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0);
+        let positions = stencils.map(|stencil| pattern.upper_positions::<N, M>(stencil));
+        match widest <= 1 << u8::BITS {
+            true => Self::Narrow(positions.map(|p| p.map(|p| p as u8)).collect()),
+            false => Self::Wide(positions.collect()),
+        }
+    }
+
+    /// Element `e`'s positions.
+    #[inline]
+    pub fn get(&self, e: usize) -> [u16; M] {
+        match self {
+            Self::Narrow(positions) => positions[e].map(u16::from),
+            Self::Wide(positions) => positions[e],
+        }
+    }
+}
+
 /// A matrix of 3×3 blocks over a [`BlockPattern`], stored in full (both triangles), so a
 /// product is a parallel gather over rows in a fixed order.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -645,6 +684,24 @@ mod tests {
         let mut out = vec![Vec3::ZERO; 3];
         m.multiply(&pattern, &x, &mut out);
         assert_eq!(out, vec![Vec3::X, 2.0 * Vec3::Y + b.transpose() * x[2], 3.0 * x[2] + b * Vec3::Y]);
+    }
+
+    /// Positions take a byte where every row's part from its diagonal on holds at most 256
+    /// blocks, and two bytes once one holds more (the hub of a fan of 256 triangles), the
+    /// same positions either way.
+    #[test]
+    fn element_positions_take_a_byte_while_every_row_is_short() {
+        for spokes in [255u32, 256] {
+            // A fan: particle 0 shares a triangle with each pair of its neighbours.
+            let triangles: Vec<[u32; 3]> = (1..spokes).map(|k| [0, k, k + 1]).collect();
+            let pattern =
+                BlockPattern::from_stencils(spokes as usize + 1, triangles.iter().map(|t| &t[..])).with_upper();
+            let positions = ElementPositions::<6>::new(&pattern, triangles.iter().copied());
+            assert_eq!(matches!(positions, ElementPositions::Narrow(_)), spokes < 256, "{spokes} spokes");
+            for (e, &t) in triangles.iter().enumerate() {
+                assert_eq!(positions.get(e), pattern.upper_positions::<3, 6>(t));
+            }
+        }
     }
 
     /// The product that reads each stored block once, for both its row and its mirror's,

@@ -14,6 +14,6 @@ pub mod spring;
 pub(crate) mod testing;
 
 pub use bending::{BendingFace, BendingLaw, BendingRigidity, BendingSurface, NO_HINGE};
-pub use block::{BlockMatrix, BlockPattern, SymmetricBlockMatrix, VelocityJacobian};
+pub use block::{BlockMatrix, BlockPattern, ElementPositions, SymmetricBlockMatrix, VelocityJacobian};
 pub use membrane::{MembraneElement, MembraneMaterial};
 pub use spring::SpringElement;
