@@ -319,9 +319,11 @@ fn split_rows<T: Send>(
 }
 
 /// Where each element's local blocks go in a [`SymmetricBlockMatrix`]: per element, its
-/// [`BlockPattern::upper_positions`], one byte each where no row holds 256 blocks from its
-/// diagonal on (a cloth's rows hold a few dozen), else two. A 256² sheet's bending faces
-/// and membranes kept 54 bytes a particle of positions in two bytes each.
+/// [`BlockPattern::upper_positions`], one byte each where no row holds more than 256
+/// blocks from its diagonal on (a cloth's rows hold a few dozen), else two. The positions
+/// of a 256² sheet's bending faces and membranes took 108 bytes a particle in two bytes
+/// each, 54 in one. Collected from an exact-size iterator, the arrays are allocated at
+/// their size.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ElementPositions<const M: usize> {
     /// One byte a position: every row holds at most 256 blocks from its diagonal on.
