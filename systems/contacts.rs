@@ -14,6 +14,7 @@ use crate::components::{
 use crate::resources::{ClothContacts, PropWorld, SimClock, SolverSettings, StepSettings};
 use crate::schedule::{FrameSystems, SimSchedules, SubstepSystems};
 use crate::solver::contact_springs::{ContactSpring, Stencil};
+use crate::solver::gather::reserve_floored;
 
 /// Resolves every cloth's contacts with every collider at the end of the step (the
 /// colliders where they are then), and adds what they did to the cloth's
@@ -196,6 +197,7 @@ pub fn collide_cloths(
         // A spring's vertices are all of one cloth (the only ones its implicit step sees).
         let within = |s: &&ContactSpring| range.contains(&(s.stencil.vertices[0] as usize));
         touching.0.clear();
+        reserve_floored(&mut touching.0, springs.len());
         touching.0.extend(springs.iter().filter(within).map(|s| {
             let stencil = Stencil { vertices: s.stencil.vertices.map(|k| k - offset as u32), ..s.stencil };
             ContactSpring { stencil, ..*s }

@@ -1,7 +1,12 @@
 //! The step allocates nothing once its buffers have grown to their working size (issue 5):
 //! a counting allocator watches whole frames after a few warm-up frames, with every
 //! integrator, body contact with friction, self-contact, strain limiting and the frame's
-//! probes. (Rigid props are left out: rapier3d's own step allocates a little.)
+//! probes. (Rigid props are left out: rapier3d's own step allocates a little.) The windows
+//! are long, since contact starting or spreading in a warm frame is what grows buffers:
+//! three frames of the draped sheet were clean by chance, where its frames 31 to 60
+//! reallocated 34 times over the 20 solvers before the contact lists started with room
+//! (`selvedge::solver::gather::FLOOR`). A list that outgrows all it has held before still
+//! grows, by doubling, as where a twist winds ever tighter.
 
 mod common;
 
@@ -65,10 +70,10 @@ fn a_warm_step_allocates_nothing_with_any_integrator() {
     for integrator in Integrator::ALL {
         for preconditioner in ["BlockJacobi", "Multigrid"] {
             let mut sim = draped_sheet(integrator, preconditioner);
-            let count = allocations_after(&mut sim, 30, 3);
+            let count = allocations_after(&mut sim, 30, 30);
             let case = format!("{integrator:?} ({preconditioner})");
             assert!(common::probe(&sim, "contact_force_n") > 0.0, "{case}: the sheet rests on the sphere");
-            assert_eq!(count, 0, "{case} allocated {count} times in 3 warm frames");
+            assert_eq!(count, 0, "{case} allocated {count} times in frames 31 to 60");
         }
     }
 }
@@ -76,10 +81,12 @@ fn a_warm_step_allocates_nothing_with_any_integrator() {
 #[test]
 fn the_bench_scenes_allocate_nothing_once_warm() {
     let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
-    for name in ["bench/hang_32.ron", "bench/sphere_64.ron", "twist.ron"] {
+    // sphere_64 counted once its sheet has landed (its contact lists grow over frames 14
+    // to 28), the others from their start.
+    for (name, warm_up) in [("bench/hang_32.ron", 3), ("bench/sphere_64.ron", 30), ("twist.ron", 3)] {
         let mut sim = common::bundled(name);
-        let count = allocations_after(&mut sim, 3, 2);
-        assert_eq!(count, 0, "{name} allocated {count} times in 2 warm frames");
+        let count = allocations_after(&mut sim, warm_up, 20);
+        assert_eq!(count, 0, "{name} allocated {count} times in frames {} to {}", warm_up + 1, warm_up + 20);
     }
 }
 
