@@ -31,11 +31,14 @@ pub struct StepSettings {
 /// neighbours are not, strains the cloth by about its step's move (on sphere_64's
 /// landing, at 2.4 m/s, 0.22 and 0.28 mean edges a step, 10 and 8 steps a frame, held the
 /// largest strain to 6 %, 0.32 gave 35 % and 0.45 tore the sheet), and a cloth at rest on
-/// a body moves far less.
+/// a body moves far less. Still, a frame takes at least `least`: a particle that static
+/// friction holds on a body is held for a whole step (`solver.min_substeps`).
 #[derive(Resource, Debug, Clone, Copy, PartialEq)]
 pub struct AdaptiveSteps {
     /// Length of a frame [s].
     pub frame_time: f32,
+    /// Fewest steps a frame takes.
+    pub least: u32,
     /// Most steps a frame takes.
     pub most: u32,
     /// How far a particle may move in a step [mean edge lengths].
@@ -43,10 +46,11 @@ pub struct AdaptiveSteps {
 }
 
 impl AdaptiveSteps {
-    /// Steps for a frame in which no particle moves farther than `reach` mean edges;
-    /// all of them for an infinite reach (or one that is not a number).
+    /// Steps for a frame in which no particle moves farther than `reach` mean edges, and
+    /// no fewer than `least`; all of them for an infinite reach (or one that is not a
+    /// number).
     pub fn steps(&self, reach: f32) -> u32 {
-        if reach.is_finite() { ((reach / self.motion).ceil() as u32).clamp(1, self.most) } else { self.most }
+        if reach.is_finite() { ((reach / self.motion).ceil() as u32).clamp(self.least, self.most) } else { self.most }
     }
 
     /// The step of a frame of `steps` steps.

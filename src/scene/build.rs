@@ -276,7 +276,8 @@ pub fn spawn_scene(world: &mut World, scene: &Scene, base_dir: &Path) -> Result<
 
     world.insert_resource(StepSettings { dt: time.dt, substeps: time.substeps });
     if let Some(motion) = scene.solver.step_motion {
-        world.insert_resource(AdaptiveSteps { frame_time: 1.0 / time.fps, most: time.substeps, motion });
+        let least = scene.solver.min_substeps.unwrap_or(1);
+        world.insert_resource(AdaptiveSteps { frame_time: 1.0 / time.fps, least, most: time.substeps, motion });
     }
     world.insert_resource(Gravity(scene.gravity));
     world.insert_resource(AirSettings(Air {

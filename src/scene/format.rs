@@ -126,6 +126,12 @@ pub struct SolverDesc {
     /// every particle within it, so a cloth landing on a body takes them all, and one at
     /// rest on it, or falling or swinging far from anything, one.
     pub step_motion: Option<f32>,
+    /// The fewest steps a frame takes with `step_motion` (default 1; refused without it).
+    /// At one step a frame, a particle that static friction stops on a body is held for
+    /// the whole frame while its neighbours slide on: over the last 90 frames of seven
+    /// runs of sphere_64 the worst strain was 0.096 to 0.245 at one step a frame, 0.035 to
+    /// 0.080 at two or more, 0.023 to 0.060 at a fixed ten (README, Choosing an integrator).
+    pub min_substeps: Option<u32>,
 }
 
 impl Default for SolverDesc {
@@ -146,6 +152,7 @@ impl Default for SolverDesc {
             descent: None,
             cfl: None,
             step_motion: None,
+            min_substeps: None,
         }
     }
 }

@@ -185,7 +185,22 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
             format!("{tolerance} is a relative error and must be below 1, typically 1e-6 to 1e-3"),
         ));
     }
-    time_plan(scene)?;
+    let time = time_plan(scene)?;
+    if let Some(least) = scene.solver.min_substeps {
+        if scene.solver.step_motion.is_none() {
+            return Err(SceneError::invalid(
+                "solver.min_substeps",
+                "bounds the steps that step_motion chooses, and without step_motion every frame takes all its \
+                 substeps: remove min_substeps, or give step_motion (0.25, say)",
+            ));
+        }
+        if least == 0 || least > time.substeps {
+            return Err(SceneError::invalid(
+                "solver.min_substeps",
+                format!("{least} is outside 1 to {}, the steps a frame may take (substeps)", time.substeps),
+            ));
+        }
+    }
 
     if scene.cloths.is_empty() {
         return Err(SceneError::invalid("cloths", "a scene needs at least one cloth"));
