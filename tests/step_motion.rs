@@ -238,8 +238,8 @@ fn self_contact_springs_are_made_over_when_the_frame_takes_another_number_of_ste
     assert!(checked > 100, "only {checked} springs checked");
 }
 
-/// sphere_64 (the bench scene) with its steps following the motion (`step_motion: 0.25`)
-/// and at least two a frame (`min_substeps: 2`) rests without crossing itself or the
+/// sphere_64_adaptive (the bench scene sphere_64 with its steps following the motion,
+/// `step_motion: 0.25`, and at least two a frame, `min_substeps: 2`) rests without crossing itself or the
 /// bodies and without the strain of a particle that static friction holds for a whole
 /// frame while its neighbours slide: over its last 90 frames its most stretched edge stays
 /// below 9 %. At one step a frame it reaches 10.5 % (0.096 to 0.245 from starts moved by 1
@@ -247,10 +247,7 @@ fn self_contact_springs_are_made_over_when_the_frame_takes_another_number_of_ste
 /// at its fixed ten steps, 0.023 to 0.060.
 #[test]
 fn sphere_64_rests_at_two_steps_a_frame_without_the_strain_of_a_frame_long_hold() {
-    let mut sim = common::bundled_with("bench/sphere_64.ron", |scene| {
-        scene.solver.step_motion = Some(0.25);
-        scene.solver.min_substeps = Some(2);
-    });
+    let mut sim = common::bundled("bench/sphere_64_adaptive.ron");
     let mut worst_at_rest: f64 = 0.0;
     for frame in 0..180 {
         common::run_frames(&mut sim, 1);

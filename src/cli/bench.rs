@@ -14,7 +14,8 @@ use crate::scene::load_scene;
 use crate::solver::integrate::StageTimes;
 
 /// The benchmark scenes, in the order they run; each is `scenes/bench/<name>.ron`.
-pub const BENCH_SCENES: [&str; 6] = ["hang_32", "hang_64", "hang_128", "hang_256", "sphere_64", "fold_64"];
+pub const BENCH_SCENES: [&str; 7] =
+    ["hang_32", "hang_64", "hang_128", "hang_256", "sphere_64", "sphere_64_adaptive", "fold_64"];
 
 /// Frames run before timing starts (caches, workspaces and the first contacts settle):
 /// full runs and `--quick` ones.
@@ -270,10 +271,15 @@ fn memory(field: &str) -> Option<u64> {
     Some(kilobytes * 1024)
 }
 
+/// The scene column's width: the longest scene name.
+fn name_width() -> usize {
+    BENCH_SCENES.iter().map(|name| name.len()).max().unwrap_or(0)
+}
+
 #[expect(clippy::print_stdout, reason = "the table is the command's output")]
 fn print_header() {
     println!(
-        "{:<10} {:>7} {:>7} {:<14} {:>5} {:>8} {:>10} {:>8} {:>8} {:>10} {:>9} {:>9} {:>6} {:>8}",
+        "{:<w$} {:>7} {:>7} {:<14} {:>5} {:>8} {:>10} {:>8} {:>8} {:>10} {:>9} {:>9} {:>6} {:>8}",
         "scene",
         "parts",
         "tris",
@@ -287,14 +293,15 @@ fn print_header() {
         "strain",
         "pen [mm]",
         "selfX",
-        "B/part"
+        "B/part",
+        w = name_width()
     );
 }
 
 #[expect(clippy::print_stdout, reason = "the table is the command's output")]
 fn print_row(r: &BenchResult) {
     println!(
-        "{:<10} {:>7} {:>7} {:<14} {:>5.1} {:>8.1} {:>10.2} {:>8.2} {:>8.3} {:>10.3e} {:>9.4} {:>9.3} {:>6} {:>8}{}",
+        "{:<w$} {:>7} {:>7} {:<14} {:>5.1} {:>8.1} {:>10.2} {:>8.2} {:>8.3} {:>10.3e} {:>9.4} {:>9.3} {:>6} {:>8}{}",
         r.scene,
         r.particles,
         r.triangles,
@@ -309,7 +316,8 @@ fn print_row(r: &BenchResult) {
         1e3 * r.max_penetration_m,
         r.max_self_intersections,
         r.bytes_per_particle.map_or("-".to_owned(), |b| format!("{b:.0}")),
-        if r.status == "completed" { String::new() } else { format!("  ({})", r.status) }
+        if r.status == "completed" { String::new() } else { format!("  ({})", r.status) },
+        w = name_width()
     );
 }
 
@@ -317,10 +325,11 @@ fn print_row(r: &BenchResult) {
 #[expect(clippy::print_stdout, reason = "the table is the command's output")]
 fn print_stages(results: &[BenchResult]) {
     println!("\nwhere a frame's time goes [ms, means over the timed frames]");
-    println!("{:<10} {:>10} {:>15} {:>10} {:>10}", "scene", "assembly", "preconditioner", "solve", "other");
+    let w = name_width();
+    println!("{:<w$} {:>10} {:>15} {:>10} {:>10}", "scene", "assembly", "preconditioner", "solve", "other");
     for r in results {
         println!(
-            "{:<10} {:>10.2} {:>15.2} {:>10.2} {:>10.2}",
+            "{:<w$} {:>10.2} {:>15.2} {:>10.2} {:>10.2}",
             r.scene, r.assembly_ms_per_frame, r.preconditioner_ms_per_frame, r.solve_ms_per_frame, r.other_ms_per_frame
         );
     }
