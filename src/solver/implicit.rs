@@ -242,18 +242,29 @@ pub fn implicit_step(
     let n = x.len();
     for buffer in [
         &mut ws.force,
-        &mut ws.start_force,
         &mut ws.rhs,
-        &mut ws.dv,
         &mut ws.delta,
         &mut ws.residual,
         &mut ws.preconditioned,
         &mut ws.direction,
         &mut ws.product,
-        &mut ws.x,
-        &mut ws.v,
     ] {
         buffer.resize(n, Vec3::ZERO);
+    }
+    // The start force and Δv apart from the last solution only for Newton iterations, and
+    // an end state only for them, the contact springs' friction and block descent's
+    // bounds: 48 bytes a particle of a cloth that needs none (the hangs). Sized from the
+    // settings and the cloth, not from what it touches now, so that a warm step does
+    // not allocate them when contact begins.
+    let newton = settings.newton_iterations > 1;
+    if newton {
+        ws.start_force.resize(n, Vec3::ZERO);
+        ws.dv.resize(n, Vec3::ZERO);
+    }
+    let descent_bounds = matches!(settings.linear_solver, LinearSolver::BlockDescent(d) if d.contact_bounds);
+    if newton || dynamics.contact_surface().is_some() || descent_bounds {
+        ws.x.resize(n, Vec3::ZERO);
+        ws.v.resize(n, Vec3::ZERO);
     }
     ws.filter.reset(n, |i| dynamics.is_free(i));
     for c in constraints.iter() {
@@ -282,8 +293,11 @@ pub fn implicit_step(
     contact_springs::add_forces(springs, x, v, &mut ws.force);
     contact_springs::add_product(springs, STIFFNESS, Blocks::All, v, &mut ws.product);
     for i in 0..n {
-        ws.start_force[i] = ws.force[i] - alpha * dynamics.mass(i) * v[i] + beta * ws.product[i];
-        ws.rhs[i] = h * ws.start_force[i] + h * h * theta * ws.product[i];
+        let start = ws.force[i] - alpha * dynamics.mass(i) * v[i] + beta * ws.product[i];
+        if newton {
+            ws.start_force[i] = start;
+        }
+        ws.rhs[i] = h * start + h * h * theta * ws.product[i];
     }
     build_system(settings, h, dynamics, ws);
     ws.stages.assembly += assembly.elapsed();
@@ -331,8 +345,9 @@ pub fn implicit_step(
             set_constraint_impulses(dynamics, settings, constraints, ws);
         }
     }
-    ws.dv.copy_from_slice(&ws.delta);
-
+    if newton {
+        ws.dv.copy_from_slice(&ws.delta);
+    }
     for _ in 1..settings.newton_iterations {
         end_of_step(x, v, &ws.dv, h, theta, &mut ws.x, &mut ws.v);
         let assembly = Instant::now();
@@ -370,7 +385,7 @@ pub fn implicit_step(
         }
     }
 
-    let dv = &ws.dv;
+    let dv = if newton { &ws.dv } else { &ws.delta };
     x.par_iter_mut().zip(v.par_iter_mut()).zip(dv.par_iter()).with_min_len(PARALLEL_MIN_LEN).for_each(
         |((x, v), dv)| {
             *x += h * (*v + theta * *dv);
@@ -459,7 +474,10 @@ fn add_springs(
     let (theta, beta) = (settings.theta, settings.rayleigh.beta);
     for i in 0..x.len() {
         let start = force[i] + beta * stiffness[i];
-        ws.start_force[i] += sign * start;
+        // Kept for Newton iterations only (`implicit_step`).
+        if let Some(start_force) = ws.start_force.get_mut(i) {
+            *start_force += sign * start;
+        }
         ws.rhs[i] += sign * (h * start + h * h * theta * stiffness[i]);
     }
 }
