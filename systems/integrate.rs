@@ -45,8 +45,9 @@ pub fn integrate_cloths(
         // into it (closing what gap the last step left), held fast where static friction
         // held them; those pulled away are let go. On a free prop they follow the prop,
         // whose velocity the step solves for too.
-        props.begin(index, colliders.iter().map(|(_, prop)| prop.map(|p| p.coupling)));
+        props.begin(index, colliders.iter().map(|(_, prop)| prop.map(|p| p.coupling)), touching.0.len());
         constraints.clear();
+        constraints.reserve(touching.0.len());
         constraints.extend(
             touching
                 .0

@@ -123,4 +123,10 @@ fn frames_whose_steps_follow_the_motion_allocate_nothing_once_warm() {
     assert!(taken[0] == 1 && taken[8] > 1, "frames 5 to 13 took {taken:?} steps: one, then more near the ground");
     assert_eq!(common::probe(&sim, "contact_force_n"), 0.0, "the square has not touched the ground yet");
     assert_eq!(count, 0, "frames whose steps follow the motion allocated {count} times ({taken:?} steps)");
+    // Landing, all its 144 particles touch the ground at once: each of the five lists
+    // that contact makes (the touches, the coupling's links, the implicit constraints,
+    // their filter blocks and impulses) grows once, not by doubling (29 allocations).
+    let landing = allocations_after(&mut sim, 0, 1);
+    assert!(common::probe(&sim, "contact_force_n") > 0.0, "the square lands in frame 14");
+    assert!(landing <= 5, "contact beginning allocated {landing} times");
 }

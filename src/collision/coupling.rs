@@ -131,8 +131,14 @@ pub struct PropCoupling {
 
 impl PropCoupling {
     /// Starts the step of cloth number `cloth` (counting from 0 every step) with the
-    /// bodies in contact order: `Some` state for the free ones.
-    pub fn begin(&mut self, cloth: usize, bodies: impl ExactSizeIterator<Item = Option<BodyCoupling>>) {
+    /// bodies in contact order: `Some` state for the free ones; `touching` particles of
+    /// the cloth may be constrained.
+    pub fn begin(
+        &mut self,
+        cloth: usize,
+        bodies: impl ExactSizeIterator<Item = Option<BodyCoupling>>,
+        touching: usize,
+    ) {
         if bodies.len() != self.bodies.len() {
             self.learned.clear();
         }
@@ -149,6 +155,8 @@ impl PropCoupling {
             ..CoupledBody::default()
         }));
         self.links.clear();
+        // Room for a link a touching particle at once, rather than by doubling.
+        self.links.reserve(touching);
     }
 
     /// Whether any body is free.

@@ -46,6 +46,12 @@ impl Filters {
         }
     }
 
+    /// Makes room for `constrained` more particles to be restricted ([`Filters::constrain`])
+    /// at once, rather than by doubling as contact begins.
+    pub fn reserve(&mut self, constrained: usize) {
+        self.blocks.reserve(constrained);
+    }
+
     /// Restricts particle `i` further: its filter becomes `projection · S_i`.
     pub fn constrain(&mut self, i: usize, projection: Mat3) {
         let filtered = projection * self.block(i);

@@ -267,6 +267,7 @@ pub fn implicit_step(
         ws.v.resize(n, Vec3::ZERO);
     }
     ws.filter.reset(n, |i| dynamics.is_free(i));
+    ws.filter.reserve(constraints.len());
     for c in constraints.iter() {
         let projection = if c.stick { Mat3::ZERO } else { Mat3::IDENTITY - outer(c.normal, c.normal) };
         ws.filter.constrain(c.particle as usize, projection);
