@@ -256,13 +256,12 @@ pub fn implicit_step(
     // bounds: 48 bytes a particle of a cloth that needs none (the hangs). Sized from the
     // settings and the cloth, not from what it touches now, so that a warm step does
     // not allocate them when contact begins.
-    let newton = settings.newton_iterations > 1;
+    let newton = iterates(settings);
     if newton {
         ws.start_force.resize(n, Vec3::ZERO);
         ws.dv.resize(n, Vec3::ZERO);
     }
-    let descent_bounds = matches!(settings.linear_solver, LinearSolver::BlockDescent(d) if d.contact_bounds);
-    if newton || dynamics.contact_surface().is_some() || descent_bounds {
+    if newton || dynamics.contact_surface().is_some() || descent_bounds(settings) {
         ws.x.resize(n, Vec3::ZERO);
         ws.v.resize(n, Vec3::ZERO);
     }
@@ -476,8 +475,8 @@ fn add_springs(
     for i in 0..x.len() {
         let start = force[i] + beta * stiffness[i];
         // Kept for Newton iterations only (`implicit_step`).
-        if let Some(start_force) = ws.start_force.get_mut(i) {
-            *start_force += sign * start;
+        if iterates(settings) {
+            ws.start_force[i] += sign * start;
         }
         ws.rhs[i] += sign * (h * start + h * h * theta * stiffness[i]);
     }
@@ -593,8 +592,18 @@ enum Start {
 /// Whether contact bounds block descent's iterations: the settings' solver is block
 /// descent with contact bounds, and the system collides with itself or with bodies.
 fn bounded(settings: &ImplicitSettings, dynamics: &impl LinearDynamics) -> bool {
+    descent_bounds(settings) && (dynamics.contact_surface().is_some() || !dynamics.contact_bodies().is_empty())
+}
+
+/// Whether the settings' solver is block descent with contact bounds.
+fn descent_bounds(settings: &ImplicitSettings) -> bool {
     matches!(settings.linear_solver, LinearSolver::BlockDescent(d) if d.contact_bounds)
-        && (dynamics.contact_surface().is_some() || !dynamics.contact_bodies().is_empty())
+}
+
+/// Whether the step takes Newton iterations after its first solve, which read the start
+/// force and keep Δv apart from the last solution.
+fn iterates(settings: &ImplicitSettings) -> bool {
+    settings.newton_iterations > 1
 }
 
 /// Solves `A delta = rhs` (the system and the contact springs) within the filters with the
