@@ -27,12 +27,17 @@ static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
 /// Allocations and reallocations over `frames` frames after `warm_up` frames.
 fn allocations_after(sim: &mut Simulation, warm_up: u32, frames: u32) -> usize {
     common::run_frames(sim, warm_up);
-    // Counted from inside the pool. A frame started from outside it is injected into
-    // rayon's global queue, which allocates a block every 63 injections, at a point that
-    // depends on how many frames the other test has run: one in three runs failed.
+    allocations_in(|| common::run_frames(sim, frames))
+}
+
+/// Allocations and reallocations while `work` runs, counted from inside the pool. A frame
+/// started from outside it is injected into rayon's global queue, which allocates a block
+/// every 63 injections, at a point that depends on how many frames the other test has
+/// run: one in three runs failed.
+fn allocations_in(work: impl FnOnce() + Send) -> usize {
     rayon::scope(|_| {
         let region = Region::new(GLOBAL);
-        common::run_frames(sim, frames);
+        work();
         let change = region.change();
         change.allocations + change.reallocations
     })
@@ -92,33 +97,22 @@ fn the_bench_scenes_allocate_nothing_once_warm() {
 #[test]
 fn frames_whose_steps_follow_the_motion_allocate_nothing_once_warm() {
     let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
-    // The square of tests/step_motion.rs, colliding with itself, falling flat towards the
-    // ground 0.3 m below: one step a frame while the ground is beyond its reach, and in
-    // frame 13 (from 0) the several its speed needs, the last frame before it touches.
-    // Counted before it touches, since contact beginning grows the contact lists (on
-    // sphere_64 with `step_motion` its self contact spread until frame 75 or later, as
-    // rounding fell, while the frames' steps changed).
-    let mut sim = common::simulation(&format!(
-        "Scene(name: \"motion\", solver: (integrator: ImplicitEuler, substeps: 12, step_motion: 0.05),
-          time: (fps: 60, frames: 60),
-          cloths: [(name: \"c\", shape: Grid(size: (1.0, 1.0), resolution: (12, 12)),
-                    placement: (translation: (0.0, 20.0, 0.0), rotation_deg: (90.0, 0.0, 0.0)),
-                    self_collision: (separation: 0.002), material: {})],
-          ground: (enabled: true, height: 19.7))",
-        common::material(200.0, 0.1)
-    ));
+    // The square of tests/step_motion.rs (`common::square_scene`), colliding with itself,
+    // falling flat towards the ground 0.3 m below: one step a frame while the ground is
+    // beyond its reach, and in frame 13 (from 0) the several its speed needs, the last
+    // frame before it touches. Counted before it touches, since contact beginning grows the
+    // contact lists (on sphere_64 with `step_motion` its self contact spread until frame 75
+    // or later, as rounding fell, while the frames' steps changed).
+    let mut sim = common::simulation(&common::square_scene(9.81, "", Some(19.7), true));
     common::run_frames(&mut sim, 5);
     // Made before counting, so that its own growth is not counted.
     let mut taken = Vec::with_capacity(9);
-    let count = rayon::scope(|_| {
-        let region = Region::new(GLOBAL);
+    let count = allocations_in(|| {
         for _ in 5..=13 {
             let before = sim.clock().step;
             common::run_frames(&mut sim, 1);
             taken.push(sim.clock().step - before);
         }
-        let change = region.change();
-        change.allocations + change.reallocations
     });
     assert!(taken[0] == 1 && taken[8] > 1, "frames 5 to 13 took {taken:?} steps: one, then more near the ground");
     assert_eq!(common::probe(&sim, "contact_force_n"), 0.0, "the square has not touched the ground yet");

@@ -3,8 +3,8 @@
 //! under Newmark at Bricis's Δt = 0.1 s, under implicit Euler at Δt = 1/30 s and under
 //! block descent at one step per 1/60 s frame, cotton and a fabric 50 times stiffer alike.
 //! Block descent converges to implicit Euler as its sweeps grow, and gives the same bits
-//! on one thread and two; Newton iterations converge on the nonlinear step. The explicit integrators at 1/30 s are reported as diverging,
-//! without a panic.
+//! on one thread and two; Newton iterations converge on the nonlinear step. The explicit
+//! integrators at 1/30 s are reported as diverging, without a panic.
 
 mod common;
 

@@ -18,23 +18,7 @@ const REACH_SLACK: f64 = 2.0;
 /// side is `(2 · 1/11 + √2/11) / 3`, under `gravity` [m/s²], with `colliders` (RON), a
 /// ground at `ground` [m] if given, colliding with itself if `self_colliding`.
 fn square(gravity: f64, colliders: &str, ground: Option<f64>, self_colliding: bool) -> selvedge::Simulation {
-    common::simulation(&square_scene(gravity, colliders, ground, self_colliding))
-}
-
-/// The scene of [`square`].
-fn square_scene(gravity: f64, colliders: &str, ground: Option<f64>, self_colliding: bool) -> String {
-    let ground = ground.map_or(String::new(), |height| format!("ground: (enabled: true, height: {height}),"));
-    let self_collision = if self_colliding { "self_collision: (separation: 0.002)," } else { "" };
-    format!(
-        "Scene(name: \"motion\", gravity: (0.0, {}, 0.0),
-          solver: (integrator: ImplicitEuler, substeps: 12, step_motion: 0.05), time: (fps: 60, frames: 60),
-          cloths: [(name: \"c\", shape: Grid(size: (1.0, 1.0), resolution: (12, 12)),
-                    placement: (translation: (0.0, 20.0, 0.0), rotation_deg: (90.0, 0.0, 0.0)),
-                    {self_collision} material: {})],
-          colliders: [{colliders}], {ground})",
-        -gravity,
-        common::material(200.0, 0.1)
-    )
+    common::simulation(&common::square_scene(gravity, colliders, ground, self_colliding))
 }
 
 fn mean_edge() -> f64 {
@@ -91,7 +75,7 @@ fn a_cloth_falling_far_from_anything_takes_one_step_a_frame_and_falls_as_implici
 
 #[test]
 fn a_frame_takes_no_fewer_steps_than_min_substeps_and_the_cloth_falls_as_implicit_euler_with_them() {
-    let mut scene = common::scene(&square_scene(G, "", None, false));
+    let mut scene = common::scene(&common::square_scene(G, "", None, false));
     scene.solver.min_substeps = Some(3);
     let mut sim = selvedge::Simulation::new(&scene, std::path::Path::new("scenes")).expect("builds");
     let frames = 30;
@@ -239,10 +223,10 @@ fn self_contact_springs_are_made_over_when_the_frame_takes_another_number_of_ste
 }
 
 /// sphere_64_adaptive (the bench scene sphere_64 with its steps following the motion,
-/// `step_motion: 0.25`, and at least two a frame, `min_substeps: 2`) rests without crossing itself or the
-/// bodies and without the strain of a particle that static friction holds for a whole
-/// frame while its neighbours slide: over its last 90 frames its most stretched edge stays
-/// below 9 %. At one step a frame it reaches 10.5 % (0.096 to 0.245 from starts moved by 1
+/// `step_motion: 0.25`, and at least two a frame, `min_substeps: 2`) rests without
+/// crossing itself or the bodies and without the strain of a particle that static
+/// friction holds for a whole frame while its neighbours slide: over its last 90 frames
+/// its most stretched edge stays below 9 %. At one step a frame it reaches 10.5 % (0.096 to 0.245 from starts moved by 1
 /// or 2 mm, every frame of one run above 7 %); at two, 0.035 to 0.080 from those starts;
 /// at its fixed ten steps, 0.023 to 0.060.
 #[test]

@@ -47,6 +47,25 @@ pub fn material(stiffness: f32, damping: f32) -> String {
 }
 pub mod oscillator;
 
+/// A 1 m square of 12 × 12 particles, flat, at rest at height 20 m, under `gravity`
+/// [m/s²], with `colliders` (RON), a ground at `ground` [m] if given, colliding with itself
+/// if `self_colliding`; its frames take the steps the motion needs, up to 12
+/// (`step_motion: 0.05`).
+pub fn square_scene(gravity: f64, colliders: &str, ground: Option<f64>, self_colliding: bool) -> String {
+    let ground = ground.map_or(String::new(), |height| format!("ground: (enabled: true, height: {height}),"));
+    let self_collision = if self_colliding { "self_collision: (separation: 0.002)," } else { "" };
+    format!(
+        "Scene(name: \"motion\", gravity: (0.0, {}, 0.0),
+          solver: (integrator: ImplicitEuler, substeps: 12, step_motion: 0.05), time: (fps: 60, frames: 60),
+          cloths: [(name: \"c\", shape: Grid(size: (1.0, 1.0), resolution: (12, 12)),
+                    placement: (translation: (0.0, 20.0, 0.0), rotation_deg: (90.0, 0.0, 0.0)),
+                    {self_collision} material: {})],
+          colliders: [{colliders}], {ground})",
+        -gravity,
+        material(200.0, 0.1)
+    )
+}
+
 /// Builds the bundled scene `scenes/<name>`.
 pub fn bundled(name: &str) -> Simulation {
     bundled_with(name, |_| {})
