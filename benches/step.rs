@@ -70,7 +70,7 @@ fn kernels(c: &mut Criterion) {
     group.sample_size(20);
     for n in KERNEL_SIZES {
         let mut cloth = build_grid((1.0, 1.0), (n, n), Affine3A::IDENTITY, &material);
-        cloth.add_surface_elements(&material, Vec3::X);
+        cloth.add_surface_elements(&material, Vec3::X).expect("a flat sheet");
         let count = cloth.particles.len();
         let topology = ClothTopology::build(
             &cloth.particles.inv_mass,

@@ -177,3 +177,31 @@ fn a_setting_of_another_integrator_is_refused_rather_than_ignored() {
     let message = error(solver, "integrator: BlockDescent, substeps: 10, theta: 0.6)");
     assert_mentions(&message, &["solver.theta", "BlockDescent", "integrator: Newmark"]);
 }
+
+#[test]
+fn quadratic_bending_on_a_curved_rest_shape_is_refused_with_the_linear_law_named() {
+    // Two triangles folded 30° along their shared edge, the x axis.
+    let obj = std::env::temp_dir().join(format!("selvedge_folded_{}.obj", std::process::id()));
+    let folded = "v 0 0 0\nv 1 0 0\nv 0.5 -1 0\nv 0.5 0.8660254 0.5\nf 1 2 3\nf 2 1 4\n";
+    std::fs::write(&obj, folded).expect("writes");
+    let material =
+        "material: (density: 0.2, stretch: (stiffness: 100.0), shear: (stiffness: 10.0), bend: (stiffness: 1.0)),";
+    let text = GOOD
+        .replacen(
+            "Grid(size: (1.0, 1.0), resolution: (8, 8))",
+            &format!("Mesh(path: {:?})", obj.display().to_string()),
+            1,
+        )
+        .replacen(
+            material,
+            "material: (density: 0.2, stretch: (stiffness: 100.0), bending: (warp: 1e-5, weft: 1e-5, law: Quadratic)),",
+            1,
+        )
+        .replacen("pins: [Indices([0, 7])],", "", 1);
+    let path = Path::new("scenes/folded.ron");
+    let scene = parse_scene(&text, path).expect("parses");
+    let built = Simulation::new(&scene, Path::new("scenes")).map_err(|e| e.located(path, &text));
+    let message = built.err().expect("refused").to_string();
+    std::fs::remove_file(&obj).ok();
+    assert_mentions(&message, &["scenes/folded.ron:", "cloths[0].material.bending.law", "30.00°", "law: Linear"]);
+}

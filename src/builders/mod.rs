@@ -74,15 +74,17 @@ impl ClothData {
     }
 
     /// Adds the material's hinges and membrane triangles over the surface, with the warp
-    /// along `warp` (world frame).
-    pub fn add_surface_elements(&mut self, material: &ClothMaterial, warp: Vec3) {
+    /// along `warp` (world frame). Fails, saying why, where the bending's law does not
+    /// suit the surface.
+    pub fn add_surface_elements(&mut self, material: &ClothMaterial, warp: Vec3) -> Result<(), String> {
         let (x, triangles) = (&self.particles.position, &self.triangles.indices);
         if let Some(bending) = &material.bending {
-            self.hinges = surface::build_bending(x, triangles, bending, warp);
+            self.hinges = surface::build_bending(x, triangles, bending, warp)?;
         }
         if let Some(membrane) = material.membrane {
             self.membranes = surface::build_membranes(x, triangles, membrane, warp);
         }
+        Ok(())
     }
 }
 

@@ -92,6 +92,10 @@ fn cut_bending(hinges: &mut BendingHinges, severs: impl Fn(&[u32]) -> bool) {
             next += 1;
         }
     }
+    if hinges.is_quadratic() {
+        let mut k = keep.iter();
+        hinges.quadratic.retain(|_| *k.next().expect("one flag per hinge"));
+    }
     retain_parallel(&mut hinges.vertices, &mut hinges.rest_angle, &keep);
     hinges.faces.retain_mut(|face| {
         for h in &mut face.hinges {

@@ -20,6 +20,9 @@ pub struct BendingHinges {
     pub law: BendingLaw,
     /// Rigidities by direction.
     pub rigidity: BendingRigidity,
+    /// Each hinge's weights for quadratic bending (`law: Quadratic`), empty otherwise; see
+    /// [`crate::solver::elements::bending::quadratic_weights`].
+    pub quadratic: Vec<[f32; 4]>,
 }
 
 impl Default for BendingHinges {
@@ -30,11 +33,18 @@ impl Default for BendingHinges {
             faces: Vec::new(),
             law: BendingLaw::Linear,
             rigidity: BendingRigidity { warp: 0.0, weft: 0.0, twist: 0.0 },
+            quadratic: Vec::new(),
         }
     }
 }
 
 impl BendingHinges {
+    /// Whether the bending is quadratic: forces linear in the positions, and a constant
+    /// Jacobian.
+    pub fn is_quadratic(&self) -> bool {
+        !self.quadratic.is_empty()
+    }
+
     /// The surface as the bending kernels see it.
     pub fn view(&self) -> BendingSurface<'_> {
         BendingSurface {
@@ -43,6 +53,7 @@ impl BendingHinges {
             faces: &self.faces,
             law: self.law,
             rigidity: self.rigidity,
+            quadratic: &self.quadratic,
         }
     }
 }

@@ -73,7 +73,8 @@ pub fn build_cloth(desc: &ClothDesc, index: usize, base_dir: &Path) -> Result<Cl
         }
     };
     data.particles.velocity.fill(desc.velocity);
-    data.add_surface_elements(&material, desc.placement.warp(desc.grain_deg));
+    data.add_surface_elements(&material, desc.placement.warp(desc.grain_deg))
+        .map_err(|e| SceneError::invalid(format!("cloths[{index}].material.bending.law"), e))?;
     Ok(data)
 }
 

@@ -438,9 +438,18 @@ impl SymmetricBlockMatrix {
     /// Zeroes the matrix and sizes it for `pattern`, in parallel: on the 256² hang scene
     /// the matrix is 24 MB, and zeroing it on one thread idled the other.
     pub fn reset(&mut self, pattern: &BlockPattern) {
+        self.reset_to_identities(pattern, &[]);
+    }
+
+    /// Sizes the matrix for `pattern` and sets each stored block to `scales[slot] I`
+    /// (zero past the end of `scales`), in parallel: a constant part of the matrix set in
+    /// the pass that would have zeroed it.
+    pub fn reset_to_identities(&mut self, pattern: &BlockPattern, scales: &[f32]) {
         let size = pattern.upper.last().expect("the pattern is laid out for a symmetric matrix (`with_upper`)");
         self.blocks.resize(*size as usize, Mat3::ZERO);
-        self.blocks.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).for_each(|block| *block = Mat3::ZERO);
+        self.blocks.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(slot, block)| {
+            *block = scales.get(slot).map_or(Mat3::ZERO, |&s| Mat3::from_diagonal(Vec3::splat(s)));
+        });
     }
 
     /// Adds the local blocks of an element over the particles `stencil`, those on and
