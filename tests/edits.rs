@@ -5,7 +5,7 @@ mod common;
 
 use glam::Vec3;
 use selvedge::Simulation;
-use selvedge::components::{ClothTopology, Particles, Pins, Springs};
+use selvedge::components::{BendingHinges, ClothTopology, Particles, Pins, Springs};
 
 const G: f32 = 9.81;
 
@@ -118,4 +118,38 @@ fn a_pin_added_through_the_world_holds_its_particle_from_the_next_frame() {
     sim.world_mut().get_mut::<Pins>(entity).expect("pins").remove(63);
     common::run_frames(&mut sim, 10);
     assert!(particles(&mut sim).position[63].y < held.y - 0.05, "released, it falls again");
+}
+
+/// A tear through a sheet that bends quadratically keeps each hinge's weights with it and
+/// leaves none across the cut: both halves hang under their own pins, each still bending.
+#[test]
+fn a_torn_sheet_bending_quadratically_hangs_as_two_halves() {
+    let mut sim = common::simulation(
+        "Scene(name: \"edit\", air: (drag: 3.0), solver: (integrator: ImplicitEuler, substeps: 2),
+          time: (fps: 60, duration_s: 5.0),
+          cloths: [(name: \"sheet\", shape: Grid(size: (1.0, 1.0), resolution: (16, 16)),
+                    placement: (translation: (0.0, 2.0, 0.0)),
+                    material: (density: 0.2, membrane: Isotropic(young: 500.0, poisson: 0.3),
+                               bending: (warp: 1e-4, weft: 1e-4, law: Quadratic)),
+                    pins: [Corners([TopLeft, TopRight])])],
+          edits: [(at_s: 1.0, cloth: \"sheet\", action: Tear(point: (0.0, 2.0, 0.0), normal: (1.0, 0.0, 0.0)))])",
+    );
+    common::run_frames(&mut sim, 60 + 240);
+    let after = particles(&mut sim);
+    let hinges = sim.world_mut().query::<&BendingHinges>().single(sim.world()).expect("one cloth").clone();
+    assert_eq!(hinges.quadratic.len(), hinges.vertices.len(), "a weight for every hinge left");
+    let crossing = hinges
+        .vertices
+        .iter()
+        .filter(|h| {
+            h.iter().any(|&p| after.rest_position[p as usize].x < 0.0)
+                && h.iter().any(|&p| after.rest_position[p as usize].x >= 0.0)
+        })
+        .count();
+    assert_eq!(crossing, 0, "no hinge joins the two halves after the tear");
+    assert!(!hinges.vertices.is_empty(), "the halves still bend");
+    let (left, _) = centre_of_mass(&after, |r| r.x < 0.0);
+    let (right, _) = centre_of_mass(&after, |r| r.x >= 0.0);
+    assert!((left.x + 0.5).abs() < 0.02, "left half hangs below its pin at x = -0.5: {left}");
+    assert!((right.x - 0.5).abs() < 0.02, "right half hangs below its pin at x = 0.5: {right}");
 }
