@@ -79,9 +79,12 @@ pub struct ClothTopology {
     pub particle_triangles: Csr,
     /// Edges of the triangles, each once, smaller particle first, sorted.
     pub edges: Vec<[u32; 2]>,
-    /// Hinge corners `4 h + c` at each particle.
+    /// Hinge corners `4 h + c` at each particle; empty where the bending is quadratic,
+    /// whose forces are rows of its Jacobian (72 bytes a particle on a regular sheet,
+    /// with `hinge_faces`).
     pub particle_hinges: Csr,
-    /// Face sides `3 f + k` at each hinge: where a hinge's moment comes from.
+    /// Face sides `3 f + k` at each hinge: where a hinge's moment comes from; empty where
+    /// the bending is quadratic.
     pub hinge_faces: Csr,
     /// Membrane corners `3 t + c` at each particle.
     pub particle_membranes: Csr,
@@ -127,6 +130,8 @@ impl ClothTopology {
                 .chain(membranes.indices.iter().map(|t| &t[..])),
         )
         .with_upper();
+        // Hinge forces gathered from their angles, unless the bending is quadratic.
+        let by_angles = !hinges.is_quadratic();
         let mut free_inv_mass = inv_mass.to_vec();
         for &p in pinned {
             free_inv_mass[p as usize] = 0.0;
@@ -135,11 +140,16 @@ impl ClothTopology {
             particle_springs: Csr::from_items(count, &springs.pairs),
             particle_triangles: Csr::from_items(count, &triangles.indices),
             edges: ContactMesh::edges_of(&triangles.indices),
-            particle_hinges: Csr::from_corners(count, &hinges.vertices),
-            hinge_faces: Csr::from_corners(
-                hinges.vertices.len(),
-                &hinges.faces.iter().map(|f| f.hinges).collect::<Vec<_>>(),
-            ),
+            particle_hinges: match by_angles {
+                true => Csr::from_corners(count, &hinges.vertices),
+                false => Csr::default(),
+            },
+            hinge_faces: match by_angles {
+                true => {
+                    Csr::from_corners(hinges.vertices.len(), &hinges.faces.iter().map(|f| f.hinges).collect::<Vec<_>>())
+                }
+                false => Csr::default(),
+            },
             particle_membranes: Csr::from_corners(count, &membranes.indices),
             spring_positions: ElementPositions::new(&pattern, springs.pairs.iter().copied()),
             face_positions: ElementPositions::new(&pattern, hinges.faces.iter().map(|f| f.vertices)),
