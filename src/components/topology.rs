@@ -94,7 +94,8 @@ pub struct ClothTopology {
     /// ([`BlockPattern::upper_positions`]).
     pub spring_positions: ElementPositions<3>,
     /// Where each bending face's local blocks go (and, through its `corners`, each of its
-    /// hinges': the exact Jacobian's hinge blocks are among a face's).
+    /// hinges': the exact Jacobian's hinge blocks are among a face's); empty where the
+    /// bending is quadratic, whose constant Jacobian finds them once.
     pub face_positions: ElementPositions<21>,
     /// Where each membrane triangle's local blocks go.
     pub membrane_positions: ElementPositions<6>,
@@ -130,7 +131,8 @@ impl ClothTopology {
                 .chain(membranes.indices.iter().map(|t| &t[..])),
         )
         .with_upper();
-        // Hinge forces gathered from their angles, unless the bending is quadratic.
+        // Hinge forces and face blocks gathered from their angles, unless the bending is
+        // quadratic.
         let by_angles = !hinges.is_quadratic();
         let mut free_inv_mass = inv_mass.to_vec();
         for &p in pinned {
@@ -152,7 +154,10 @@ impl ClothTopology {
             },
             particle_membranes: Csr::from_corners(count, &membranes.indices),
             spring_positions: ElementPositions::new(&pattern, springs.pairs.iter().copied()),
-            face_positions: ElementPositions::new(&pattern, hinges.faces.iter().map(|f| f.vertices)),
+            face_positions: match by_angles {
+                true => ElementPositions::new(&pattern, hinges.faces.iter().map(|f| f.vertices)),
+                false => ElementPositions::default(),
+            },
             membrane_positions: ElementPositions::new(&pattern, membranes.indices.iter().copied()),
             colouring: Colouring::greedy(&pattern),
             hierarchy: Hierarchy::build(

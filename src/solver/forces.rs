@@ -115,7 +115,7 @@ impl QuadraticBlocks {
             self.scales.resize(pattern.upper.last().map_or(0, |&size| size as usize), 0.0);
             let bending = hinges.view();
             for (f, face) in hinges.faces.iter().enumerate() {
-                let slots = pattern.upper_slots_at(face.vertices, &topology.face_positions.get(f));
+                let slots = pattern.upper_slots_at(face.vertices, &pattern.upper_positions::<6, 21>(face.vertices));
                 for (scale, slot) in bending.quadratic_jacobian(f).into_iter().zip(slots) {
                     self.scales[slot as usize] += scale;
                 }
