@@ -470,9 +470,8 @@ impl ForceModel<'_> {
         // Each part of the rows gathers its particles' forces before the membranes', adds
         // the forces of the membranes with a corner among them in the membranes' order,
         // which is the order of each particle's own list, then quadratic bending's, then
-        // the wind's. A membrane
-        // beside a cut is computed by both parts; kept instead, the membranes' forces
-        // were 72 bytes a particle.
+        // the wind's. A membrane beside a cut is computed by both parts; kept instead, the
+        // membranes' forces were 72 bytes a particle.
         scratch.row_parts.refresh(self, false);
         scratch.quadratic.refresh(self);
         let scratch = &*scratch;
