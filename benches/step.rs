@@ -8,6 +8,7 @@ use std::time::Instant;
 use criterion::{Bencher, BenchmarkId, Criterion, criterion_group, criterion_main};
 use glam::{Affine3A, Vec3};
 use selvedge::Simulation;
+use selvedge::builders::ClothData;
 use selvedge::builders::grid::build_grid;
 use selvedge::collision::intersection::IntersectionCounter;
 use selvedge::components::{BendingDesc, BendingLawDesc, ClothMaterial, ClothTopology, MembraneDesc};
@@ -52,26 +53,24 @@ fn whole_step(c: &mut Criterion) {
 /// Particles per side of the kernel benches: about 1 k, 16 k and 65 k particles.
 const KERNEL_SIZES: [u32; 3] = [32, 128, 256];
 
-/// The kernels alone on the material of the `selvedge bench` scenes (membrane μ = λ =
-/// 1000 N/m, bending 1e-5 N·m, 0.2 kg/m²): force evaluation, the per-frame probes
-/// (potential energy, largest strain, self-intersection count), derivative assembly, one
-/// symmetric block-descent sweep over the implicit-Euler system at 1/60 s, and whole
-/// steps of three integrators, each timed on a worker of rayon's pool ([`on_pool`]).
-fn kernels(c: &mut Criterion) {
-    let material = ClothMaterial {
-        density: 0.2,
-        stretch: None,
-        shear: None,
-        bend: None,
-        membrane: Some(MembraneDesc::Isotropic { young: 2666.667, poisson: 1.0 / 3.0 }),
-        bending: Some(BendingDesc { warp: 1e-5, weft: 1e-5, twist: None, law: BendingLawDesc::Linear }),
-    };
-    let mut group = c.benchmark_group("kernels");
-    group.sample_size(20);
-    for n in KERNEL_SIZES {
+/// A flat n × n sheet of the `selvedge bench` material bending by `law`, and its topology.
+struct Sheet {
+    cloth: ClothData,
+    topology: ClothTopology,
+}
+
+impl Sheet {
+    fn new(n: u32, law: BendingLawDesc) -> Self {
+        let material = ClothMaterial {
+            density: 0.2,
+            stretch: None,
+            shear: None,
+            bend: None,
+            membrane: Some(MembraneDesc::Isotropic { young: 2666.667, poisson: 1.0 / 3.0 }),
+            bending: Some(BendingDesc { warp: 1e-5, weft: 1e-5, twist: None, law }),
+        };
         let mut cloth = build_grid((1.0, 1.0), (n, n), Affine3A::IDENTITY, &material);
         cloth.add_surface_elements(&material, Vec3::X).expect("a flat sheet");
-        let count = cloth.particles.len();
         let topology = ClothTopology::build(
             &cloth.particles.inv_mass,
             &cloth.springs,
@@ -81,18 +80,39 @@ fn kernels(c: &mut Criterion) {
             &[],
             1,
         );
-        let model = ForceModel {
+        Self { cloth, topology }
+    }
+
+    fn model(&self) -> ForceModel<'_> {
+        let cloth = &self.cloth;
+        ForceModel {
             inv_mass: &cloth.particles.inv_mass,
-            density: material.density,
+            density: 0.2,
             springs: &cloth.springs,
             triangles: &cloth.triangles.indices,
             hinges: &cloth.hinges,
             membranes: &cloth.membranes,
-            topology: &topology,
+            topology: &self.topology,
             gravity: Vec3::new(0.0, -9.81, 0.0),
             air: Air::default(),
             user_forces: &[],
-        };
+        }
+    }
+}
+
+/// The kernels alone on the material of the `selvedge bench` scenes (membrane μ = λ =
+/// 1000 N/m, bending 1e-5 N·m, 0.2 kg/m²): force evaluation, the per-frame probes
+/// (potential energy, largest strain, self-intersection count), derivative assembly, one
+/// symmetric block-descent sweep over the implicit-Euler system at 1/60 s, and whole
+/// steps of three integrators, each timed on a worker of rayon's pool ([`on_pool`]); and
+/// the forces and derivatives again with `law: Quadratic`.
+fn kernels(c: &mut Criterion) {
+    let mut group = c.benchmark_group("kernels");
+    group.sample_size(20);
+    for n in KERNEL_SIZES {
+        let sheet = Sheet::new(n, BendingLawDesc::Linear);
+        let (cloth, topology, model) = (&sheet.cloth, &sheet.topology, sheet.model());
+        let count = cloth.particles.len();
         let size = format!("{count}");
         let mut scratch = ForceScratch::default();
         let mut force = vec![Vec3::ZERO; count];
@@ -118,6 +138,19 @@ fn kernels(c: &mut Criterion) {
         group.bench_function(BenchmarkId::new("derivatives", &size), |b| {
             on_pool(b, || model.assemble(black_box(&x), &v, 0.0, true, &mut scratch, &mut force, &mut dfdx, &mut dfdv));
         });
+        {
+            let quadratic = Sheet::new(n, BendingLawDesc::Quadratic);
+            let model = quadratic.model();
+            let mut scratch = ForceScratch::default();
+            group.bench_function(BenchmarkId::new("forces/quadratic", &size), |b| {
+                on_pool(b, || model.eval(black_box(&x), &v, 0.0, &mut scratch, &mut force));
+            });
+            group.bench_function(BenchmarkId::new("derivatives/quadratic", &size), |b| {
+                on_pool(b, || {
+                    model.assemble(black_box(&x), &v, 0.0, true, &mut scratch, &mut force, &mut dfdx, &mut dfdv);
+                });
+            });
+        }
         // Assembled here too, so that a filter that skips the bench above leaves a system.
         model.assemble(&x, &v, 0.0, true, &mut scratch, &mut force, &mut dfdx, &mut dfdv);
         let h = 1.0 / 60.0f32;
