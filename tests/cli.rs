@@ -236,6 +236,7 @@ fn bench_times_the_named_scenes_and_writes_their_table_as_json() {
     assert_eq!((hang["scene"].as_str(), hang["status"].as_str()), (Some("hang_32"), Some("completed")));
     assert_eq!((hang["particles"].as_u64(), hang["triangles"].as_u64()), (Some(1024), Some(2 * 31 * 31)));
     assert_eq!(hang["timed_frames"], 10);
+    assert_eq!(hang["bending"].as_str(), Some("Quadratic"), "the hang scenes bend by the quadratic form");
     for field in
         ["ms_per_frame", "probe_ms_per_frame", "realtime_factor", "particle_iterations_per_s", "iterations_per_frame"]
     {

@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 use super::{EXIT_IO, Failure};
 use crate::Simulation;
 use crate::io::report::write_json;
-use crate::scene::load_scene;
+use crate::scene::{Scene, load_scene};
 use crate::solver::integrate::StageTimes;
 
 /// The benchmark scenes, in the order they run; each is `scenes/bench/<name>.ron`.
@@ -36,6 +36,11 @@ pub struct BenchResult {
     pub triangles: usize,
     /// Integrator name.
     pub solver: String,
+    /// The cloths' bending laws (`Linear`, `Quadratic`, `Zheng`), `none` for a cloth
+    /// without bending, `+`-separated where the cloths differ: the same rigidity makes
+    /// different work under different laws.
+    #[serde(default)]
+    pub bending: String,
     /// Steps per frame, the mean over the timed frames: the scene's `substeps`, or with
     /// `step_motion` the steps its frames took, up to `substeps`.
     pub steps_per_frame: f64,
@@ -213,6 +218,7 @@ fn bench_scene(path: &Path, quick: bool) -> Result<BenchResult, Failure> {
         particles: counts.particles,
         triangles: counts.triangles,
         solver: file.scene.solver.integrator.name().to_owned(),
+        bending: bending_laws(&file.scene),
         steps_per_frame: (simulation.clock().step - steps_before) as f64 / f64::from(timed_frames.max(1)),
         iterations_per_frame,
         timed_frames,
@@ -271,6 +277,18 @@ fn memory(field: &str) -> Option<u64> {
     Some(kilobytes * 1024)
 }
 
+/// The cloths' bending laws, each once, in the cloths' order ([`BenchResult::bending`]).
+fn bending_laws(scene: &Scene) -> String {
+    let mut laws: Vec<&str> = Vec::new();
+    for cloth in &scene.cloths {
+        let law = cloth.resolved_material().and_then(|m| m.bending).map_or("none", |b| b.law.name());
+        if !laws.contains(&law) {
+            laws.push(law);
+        }
+    }
+    laws.join("+")
+}
+
 /// The scene column's width: the longest scene name.
 fn name_width() -> usize {
     BENCH_SCENES.iter().map(|name| name.len()).max().unwrap_or(0)
@@ -279,11 +297,12 @@ fn name_width() -> usize {
 #[expect(clippy::print_stdout, reason = "the table is the command's output")]
 fn print_header() {
     println!(
-        "{:<w$} {:>7} {:>7} {:<14} {:>5} {:>8} {:>10} {:>8} {:>8} {:>10} {:>9} {:>9} {:>6} {:>8}",
+        "{:<w$} {:>7} {:>7} {:<14} {:<9} {:>5} {:>8} {:>10} {:>8} {:>8} {:>10} {:>9} {:>9} {:>6} {:>8}",
         "scene",
         "parts",
         "tris",
         "solver",
+        "bending",
         "steps",
         "iter/fr",
         "ms/frame",
@@ -301,11 +320,12 @@ fn print_header() {
 #[expect(clippy::print_stdout, reason = "the table is the command's output")]
 fn print_row(r: &BenchResult) {
     println!(
-        "{:<w$} {:>7} {:>7} {:<14} {:>5.1} {:>8.1} {:>10.2} {:>8.2} {:>8.3} {:>10.3e} {:>9.4} {:>9.3} {:>6} {:>8}{}",
+        "{:<w$} {:>7} {:>7} {:<14} {:<9} {:>5.1} {:>8.1} {:>10.2} {:>8.2} {:>8.3} {:>10.3e} {:>9.4} {:>9.3} {:>6} {:>8}{}",
         r.scene,
         r.particles,
         r.triangles,
         r.solver,
+        r.bending,
         r.steps_per_frame,
         r.iterations_per_frame,
         r.ms_per_frame,

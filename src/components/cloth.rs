@@ -96,6 +96,17 @@ pub enum BendingLawDesc {
     Quadratic,
 }
 
+impl BendingLawDesc {
+    /// The law's name, as a scene writes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Linear => "Linear",
+            Self::Zheng { .. } => "Zheng",
+            Self::Quadratic => "Quadratic",
+        }
+    }
+}
+
 /// Bending over the hinges of the surface, by direction.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
