@@ -282,12 +282,25 @@ mod tests {
     use crate::components::{BendingDesc, BendingLawDesc};
     use crate::solver::elements::testing::{assert_close, central_difference, full_blocks};
 
-    /// A 3 × 3 grid folded and twisted a little, and its bending.
-    fn surface(law: BendingLawDesc) -> (Vec<Vec3>, crate::components::BendingHinges) {
-        let rest: Vec<Vec3> = (0..9).map(|i| Vec3::new((i % 3) as f32 * 0.1, (i / 3) as f32 * 0.1, 0.0)).collect();
-        let triangles = [[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4], [3, 4, 7], [3, 7, 6], [4, 5, 8], [4, 8, 7]];
+    /// The triangles of a 3 × 3 grid.
+    const TRIANGLES: [[u32; 3]; 8] =
+        [[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4], [3, 4, 7], [3, 7, 6], [4, 5, 8], [4, 8, 7]];
+
+    /// The 3 × 3 grid flat at rest, 10 cm cells in the XY plane.
+    fn rest() -> Vec<Vec3> {
+        (0..9).map(|i| Vec3::new((i % 3) as f32 * 0.1, (i / 3) as f32 * 0.1, 0.0)).collect()
+    }
+
+    /// The bending of the grid at `rest` by `law`, the warp a little off X.
+    fn bending_of(rest: &[Vec3], law: BendingLawDesc) -> Result<crate::components::BendingHinges, String> {
         let desc = BendingDesc { warp: 2e-3, weft: 1e-3, twist: None, law };
-        let bending = build_bending(&rest, &triangles, &desc, Vec3::new(1.0, 0.2, 0.0)).expect("flat");
+        build_bending(rest, &TRIANGLES, &desc, Vec3::new(1.0, 0.2, 0.0))
+    }
+
+    /// The 3 × 3 grid folded and twisted a little, and its bending.
+    fn surface(law: BendingLawDesc) -> (Vec<Vec3>, crate::components::BendingHinges) {
+        let rest = rest();
+        let bending = bending_of(&rest, law).expect("flat");
         let bent = rest
             .iter()
             .enumerate()
@@ -306,6 +319,33 @@ mod tests {
         let mut delta = vec![0.0; bending.vertices.len()];
         view.angles(x, &mut delta);
         (0..bending.faces.len()).map(|f| view.face_energy(f, &delta)).sum()
+    }
+
+    /// Asserts that `forces` at `x` are minus the gradient of `energy`, by central
+    /// differences particle by particle.
+    fn assert_forces_descend(x: &[Vec3], forces: &[Vec3], energy: impl Fn(&[Vec3]) -> f32, what: &str) {
+        for v in 0..x.len() {
+            let numeric = -central_difference(
+                |p| {
+                    let mut y = x.to_vec();
+                    y[v] = p;
+                    energy(&y)
+                },
+                x[v],
+            );
+            assert_close(forces[v], numeric, 3e-3, &format!("{what} force on {v}"));
+        }
+    }
+
+    /// Adds face `face`'s blocks (all 6 × 6 of them) to the full `jacobian`, each pair of
+    /// its distinct vertices once.
+    fn add_face(jacobian: &mut [Vec<Mat3>], face: &BendingFace, blocks: &[[Mat3; 6]; 6]) {
+        let count = face.vertices.iter().collect::<std::collections::BTreeSet<_>>().len();
+        for a in 0..count {
+            for b in 0..count {
+                jacobian[face.vertices[a] as usize][face.vertices[b] as usize] += blocks[a][b];
+            }
+        }
     }
 
     fn forces(bending: &crate::components::BendingHinges, x: &[Vec3]) -> Vec<Vec3> {
@@ -335,18 +375,7 @@ mod tests {
     fn forces_are_minus_the_gradient_of_the_energy() {
         for law in LAWS {
             let (x, bending) = surface(law);
-            let f = forces(&bending, &x);
-            for v in 0..x.len() {
-                let numeric = -central_difference(
-                    |p| {
-                        let mut y = x.clone();
-                        y[v] = p;
-                        energy(&bending, &y)
-                    },
-                    x[v],
-                );
-                assert_close(f[v], numeric, 3e-3, &format!("{law:?} force on {v}"));
-            }
+            assert_forces_descend(&x, &forces(&bending, &x), |y| energy(&bending, y), &format!("{law:?}"));
         }
     }
 
@@ -369,13 +398,7 @@ mod tests {
                         moments[face.hinges[k] as usize] += m;
                     }
                 }
-                let blocks: [[Mat3; 6]; 6] = full_blocks(&view.face_jacobian(f, &gradients, &delta));
-                let count = face.vertices.iter().collect::<std::collections::BTreeSet<_>>().len();
-                for a in 0..count {
-                    for b in 0..count {
-                        jacobian[face.vertices[a] as usize][face.vertices[b] as usize] += blocks[a][b];
-                    }
-                }
+                add_face(&mut jacobian, face, &full_blocks(&view.face_jacobian(f, &gradients, &delta)));
             }
             for h in 0..bending.vertices.len() {
                 let blocks = view.hinge_curvature_jacobian(h, &x, moments[h]);
@@ -406,8 +429,7 @@ mod tests {
     /// The gentle surface: `surface`'s dome, ripple and twist scaled by `amplitude`.
     fn gentle(law: BendingLawDesc, amplitude: f32) -> (Vec<Vec3>, crate::components::BendingHinges) {
         let (bent, bending) = surface(law);
-        let rest: Vec<Vec3> = (0..9).map(|i| Vec3::new((i % 3) as f32 * 0.1, (i / 3) as f32 * 0.1, 0.0)).collect();
-        (rest.iter().zip(bent).map(|(r, b)| *r + amplitude * (b - *r)).collect(), bending)
+        (rest().iter().zip(bent).map(|(r, b)| *r + amplitude * (b - *r)).collect(), bending)
     }
 
     fn quadratic_energy(bending: &crate::components::BendingHinges, x: &[Vec3]) -> f32 {
@@ -419,28 +441,15 @@ mod tests {
         // The forces are `J x` (linear, zero at rest), as the force model forms them.
         let (x, bending) = surface(BendingLawDesc::Quadratic);
         assert!(bending.is_quadratic());
-        let mut forces = vec![Vec3::ZERO; x.len()];
+        let n = x.len();
+        let mut jacobian = vec![vec![Mat3::ZERO; n]; n];
         for (f, face) in bending.faces.iter().enumerate() {
-            let blocks: [[Mat3; 6]; 6] =
-                full_blocks(&bending.view().quadratic_jacobian(f).map(|s| Mat3::from_diagonal(Vec3::splat(s))));
-            let count = face.vertices.iter().collect::<std::collections::BTreeSet<_>>().len();
-            for a in 0..count {
-                for b in 0..count {
-                    forces[face.vertices[a] as usize] += blocks[a][b] * x[face.vertices[b] as usize];
-                }
-            }
+            let identities = bending.view().quadratic_jacobian(f).map(|s| Mat3::from_diagonal(Vec3::splat(s)));
+            add_face(&mut jacobian, face, &full_blocks(&identities));
         }
-        for (v, force) in forces.into_iter().enumerate() {
-            let numeric = -central_difference(
-                |p| {
-                    let mut y = x.clone();
-                    y[v] = p;
-                    quadratic_energy(&bending, &y)
-                },
-                x[v],
-            );
-            assert_close(force, numeric, 3e-3, &format!("quadratic force on {v}"));
-        }
+        let forces: Vec<Vec3> =
+            jacobian.iter().map(|row| row.iter().zip(&x).map(|(block, p)| *block * *p).sum()).collect();
+        assert_forces_descend(&x, &forces, |y| quadratic_energy(&bending, y), "quadratic");
     }
 
     #[test]
@@ -475,9 +484,7 @@ mod tests {
     #[test]
     fn quadratic_bending_refuses_a_curved_rest_shape() {
         let (bent, _) = surface(BendingLawDesc::Linear);
-        let triangles = [[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4], [3, 4, 7], [3, 7, 6], [4, 5, 8], [4, 8, 7]];
-        let desc = BendingDesc { warp: 2e-3, weft: 1e-3, twist: None, law: BendingLawDesc::Quadratic };
-        let error = build_bending(&bent, &triangles, &desc, Vec3::X).expect_err("a dome at rest");
+        let error = bending_of(&bent, BendingLawDesc::Quadratic).expect_err("a dome at rest");
         assert!(error.contains("flat at rest") && error.contains("law: Linear"), "{error}");
     }
 
