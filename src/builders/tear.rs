@@ -92,11 +92,9 @@ fn cut_bending(hinges: &mut BendingHinges, severs: impl Fn(&[u32]) -> bool) {
             next += 1;
         }
     }
-    if hinges.is_quadratic() {
-        let mut k = keep.iter();
-        hinges.quadratic.retain(|_| *k.next().expect("one flag per hinge"));
-    }
     retain_parallel(&mut hinges.vertices, &mut hinges.rest_angle, &keep);
+    // Quadratic bending's weights, one a hinge (none for the other laws).
+    retain_kept(&mut hinges.quadratic, &keep);
     hinges.faces.retain_mut(|face| {
         for h in &mut face.hinges {
             if *h != NO_HINGE {
@@ -109,10 +107,14 @@ fn cut_bending(hinges: &mut BendingHinges, severs: impl Fn(&[u32]) -> bool) {
 
 /// Keeps the entries of two parallel columns where `keep` is true.
 fn retain_parallel<A, B>(a: &mut Vec<A>, b: &mut Vec<B>, keep: &[bool]) {
+    retain_kept(a, keep);
+    retain_kept(b, keep);
+}
+
+/// Keeps the entries of a column where `keep` is true.
+fn retain_kept<T>(column: &mut Vec<T>, keep: &[bool]) {
     let mut k = keep.iter();
-    a.retain(|_| *k.next().expect("one flag per entry"));
-    let mut k = keep.iter();
-    b.retain(|_| *k.next().expect("one flag per entry"));
+    column.retain(|_| *k.next().expect("one flag per entry"));
 }
 
 #[cfg(test)]
