@@ -472,10 +472,11 @@ fn add_springs(
     contact_springs::add_forces(springs, x, v, force);
     contact_springs::add_product(springs, STIFFNESS, Blocks::All, v, stiffness);
     let (theta, beta) = (settings.theta, settings.rayleigh.beta);
+    // The start force is kept for Newton iterations only (`implicit_step`).
+    let newton = iterates(settings);
     for i in 0..x.len() {
         let start = force[i] + beta * stiffness[i];
-        // Kept for Newton iterations only (`implicit_step`).
-        if iterates(settings) {
+        if newton {
             ws.start_force[i] += sign * start;
         }
         ws.rhs[i] += sign * (h * start + h * h * theta * stiffness[i]);
