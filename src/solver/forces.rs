@@ -97,6 +97,9 @@ struct QuadraticBlocks {
     /// The topology's build and the number of faces the scales were found for.
     key: Option<(u32, usize)>,
     scales: Vec<f32>,
+    /// What the scales outside the multigrid's finest pattern lump onto each particle's
+    /// diagonal per unit stiffness weight ([`Hierarchy::constant_lumps`]).
+    lumps: Vec<f32>,
 }
 
 impl QuadraticBlocks {
@@ -120,8 +123,16 @@ impl QuadraticBlocks {
                     self.scales[slot as usize] += scale;
                 }
             }
+            topology.hierarchy.constant_lumps(pattern, &self.scales, &mut self.lumps);
         }
         &self.scales
+    }
+
+    /// The lumps of the scales last refreshed for `model`, if its bending is quadratic.
+    fn lumps(&self, model: &ForceModel<'_>) -> Option<&[f32]> {
+        let current =
+            model.hinges.is_quadratic() && self.key == Some((model.topology.builds, model.hinges.faces.len()));
+        current.then_some(self.lumps.as_slice())
     }
 }
 
@@ -697,6 +708,12 @@ impl LinearDynamics for ClothDynamics<'_> {
 
     fn hierarchy(&self) -> &Hierarchy {
         &self.model.topology.hierarchy
+    }
+
+    /// The quadratic bending's, whose Jacobian is constant and alone reaches outside the
+    /// finest pattern (the springs and membranes are within it).
+    fn constant_lumps(&self) -> Option<&[f32]> {
+        self.scratch.quadratic.lumps(&self.model)
     }
 
     fn contact_springs(&self) -> &[ContactSpring] {

@@ -30,7 +30,7 @@ use super::elements::spring::outer;
 use super::elements::{BlockPattern, SymmetricBlockMatrix, VelocityJacobian};
 use super::filter::Filters;
 use super::integrate::{Dynamics, StageTimes, StepReport};
-use super::multigrid::{Hierarchy, Multigrid};
+use super::multigrid::{ConstantLumps, Hierarchy, Multigrid};
 use crate::collision::body_bounds;
 use crate::collision::body_contact::ContactBody;
 use crate::collision::motion_bounds::{Bound, MotionBounds, Surface};
@@ -100,6 +100,12 @@ pub trait LinearDynamics: Dynamics + Sync {
     fn colouring(&self) -> &Colouring;
     /// The particles grouped level by level, for the multigrid preconditioner.
     fn hierarchy(&self) -> &Hierarchy;
+    /// Per particle, what the derivatives' blocks outside the hierarchy's finest pattern
+    /// lump onto its diagonal per unit stiffness weight, if they are constant
+    /// ([`Hierarchy::constant_lumps`]); none to lump the system's blocks as they are.
+    fn constant_lumps(&self) -> Option<&[f32]> {
+        None
+    }
     /// The surface whose contact with itself bounds each iteration of block descent, if
     /// the system collides with itself.
     fn contact_surface(&self) -> Option<Surface<'_>> {
@@ -640,7 +646,8 @@ fn solve(
             conjugate_gradient(pattern, None, springs_of(settings, dynamics), settings, tolerance, x, ws)
         }
         LinearSolver::Multigrid => {
-            let (hierarchy, springs) = (Some(dynamics.hierarchy()), springs_of(settings, dynamics));
+            let hierarchy = Some((dynamics.hierarchy(), dynamics.constant_lumps()));
+            let springs = springs_of(settings, dynamics);
             let iterations = conjugate_gradient(pattern, hierarchy, springs, settings, tolerance, x, ws);
             // A looser solve's iterations say nothing of the levels' strength.
             if tolerance == settings.cg_tolerance {
@@ -712,14 +719,15 @@ fn fused(
 /// `tolerance` by preconditioned conjugate gradients (Baraff & Witkin's modified PCG), `A`
 /// the system matrix with the `springs`' off-diagonal blocks ([`multiply_system`]):
 /// `delta` starts as given and only moves within the filters. The preconditioner is a
-/// multigrid V-cycle over `hierarchy` if given, else block Jacobi. Returns the iterations
+/// multigrid V-cycle over `hierarchy` if given (with its constant lumps, if any), else
+/// block Jacobi. Returns the iterations
 /// taken. Stops early on a direction of non-positive curvature, which a semi-definite
 /// assembly should not give. The vector work runs in parallel over fixed chunks of
 /// particles, each pass computing the dot products it needs on the way, summed in chunk
 /// order.
 fn conjugate_gradient(
     pattern: &BlockPattern,
-    hierarchy: Option<&Hierarchy>,
+    hierarchy: Option<(&Hierarchy, Option<&[f32]>)>,
     springs: &[ContactSpring],
     settings: &ImplicitSettings,
     tolerance: f32,
@@ -748,7 +756,10 @@ fn conjugate_gradient(
     if !*prepared {
         let preparing = Instant::now();
         match hierarchy {
-            Some(hierarchy) => multigrid.prepare(hierarchy, pattern, system, filter, x),
+            Some((hierarchy, lumps)) => {
+                let lumps = lumps.map(|per_row| ConstantLumps { per_row, weight: weights.stiffness });
+                multigrid.prepare(hierarchy, pattern, system, filter, x, lumps);
+            }
             None => (0..filter.len())
                 .into_par_iter()
                 .with_min_len(PARALLEL_MIN_LEN)
@@ -764,7 +775,7 @@ fn conjugate_gradient(
     let (filter, rhs) = (&*filter, &*rhs);
     // z = M⁻¹ r, returning r·z.
     let mut precondition = |r: &[Vec3], z: &mut [Vec3], partials: &mut Vec<f64>| {
-        if let Some(hierarchy) = hierarchy {
+        if let Some((hierarchy, _)) = hierarchy {
             multigrid.apply(hierarchy, filter, r, z);
         }
         let jacobi = hierarchy.is_none().then_some(&*preconditioner);
