@@ -11,7 +11,7 @@ use super::elements::block::{by_parts, oriented, upper_map, upper_pair, upper_pa
 use super::elements::{BlockPattern, NO_HINGE, SpringElement, SymmetricBlockMatrix, VelocityJacobian};
 use super::implicit::LinearDynamics;
 use super::integrate::Dynamics;
-use super::multigrid::Hierarchy;
+use super::multigrid::{ConstantCouplings, Hierarchy};
 use super::reduce;
 use crate::collision::body_contact::ContactBody;
 use crate::collision::motion_bounds::Surface;
@@ -97,9 +97,8 @@ struct QuadraticBlocks {
     /// The topology's build and the number of faces the scales were found for.
     key: Option<(u32, usize)>,
     scales: Vec<f32>,
-    /// What the scales outside the multigrid's finest pattern lump onto each particle's
-    /// diagonal per unit stiffness weight ([`Hierarchy::constant_lumps`]).
-    lumps: Vec<f32>,
+    /// The scales outside the multigrid's finest pattern, by rows, and their lumps.
+    couplings: ConstantCouplings,
 }
 
 impl QuadraticBlocks {
@@ -123,16 +122,16 @@ impl QuadraticBlocks {
                     self.scales[slot as usize] += scale;
                 }
             }
-            topology.hierarchy.constant_lumps(pattern, &self.scales, &mut self.lumps);
+            topology.hierarchy.constant_couplings(pattern, &self.scales, &mut self.couplings);
         }
         &self.scales
     }
 
-    /// The lumps of the scales last refreshed for `model`, if its bending is quadratic.
-    fn lumps(&self, model: &ForceModel<'_>) -> Option<&[f32]> {
+    /// The couplings of the scales last refreshed for `model`, if its bending is quadratic.
+    fn couplings(&self, model: &ForceModel<'_>) -> Option<&ConstantCouplings> {
         let current =
             model.hinges.is_quadratic() && self.key == Some((model.topology.builds, model.hinges.faces.len()));
-        current.then_some(self.lumps.as_slice())
+        current.then_some(&self.couplings)
     }
 }
 
@@ -712,8 +711,8 @@ impl LinearDynamics for ClothDynamics<'_> {
 
     /// The quadratic bending's, whose Jacobian is constant and alone reaches outside the
     /// finest pattern (the springs and membranes are within it).
-    fn constant_lumps(&self) -> Option<&[f32]> {
-        self.scratch.quadratic.lumps(&self.model)
+    fn constant_couplings(&self) -> Option<&ConstantCouplings> {
+        self.scratch.quadratic.couplings(&self.model)
     }
 
     fn contact_springs(&self) -> &[ContactSpring] {

@@ -30,7 +30,7 @@ use super::elements::spring::outer;
 use super::elements::{BlockPattern, SymmetricBlockMatrix, VelocityJacobian};
 use super::filter::Filters;
 use super::integrate::{Dynamics, StageTimes, StepReport};
-use super::multigrid::{ConstantLumps, Hierarchy, Multigrid};
+use super::multigrid::{ConstantCouplings, Hierarchy, Multigrid, WeightedCouplings};
 use crate::collision::body_bounds;
 use crate::collision::body_contact::ContactBody;
 use crate::collision::motion_bounds::{Bound, MotionBounds, Surface};
@@ -100,10 +100,10 @@ pub trait LinearDynamics: Dynamics + Sync {
     fn colouring(&self) -> &Colouring;
     /// The particles grouped level by level, for the multigrid preconditioner.
     fn hierarchy(&self) -> &Hierarchy;
-    /// Per particle, what the derivatives' blocks outside the hierarchy's finest pattern
-    /// lump onto its diagonal per unit stiffness weight, if they are constant
-    /// ([`Hierarchy::constant_lumps`]); none to lump the system's blocks as they are.
-    fn constant_lumps(&self) -> Option<&[f32]> {
+    /// The derivatives' couplings outside the hierarchy's finest pattern, if they are
+    /// constant ([`Hierarchy::constant_couplings`]); none to take the system's blocks as
+    /// they are.
+    fn constant_couplings(&self) -> Option<&ConstantCouplings> {
         None
     }
     /// The surface whose contact with itself bounds each iteration of block descent, if
@@ -646,7 +646,7 @@ fn solve(
             conjugate_gradient(pattern, None, springs_of(settings, dynamics), settings, tolerance, x, ws)
         }
         LinearSolver::Multigrid => {
-            let hierarchy = Some((dynamics.hierarchy(), dynamics.constant_lumps()));
+            let hierarchy = Some((dynamics.hierarchy(), dynamics.constant_couplings()));
             let springs = springs_of(settings, dynamics);
             let iterations = conjugate_gradient(pattern, hierarchy, springs, settings, tolerance, x, ws);
             // A looser solve's iterations say nothing of the levels' strength.
@@ -727,7 +727,7 @@ fn fused(
 /// order.
 fn conjugate_gradient(
     pattern: &BlockPattern,
-    hierarchy: Option<(&Hierarchy, Option<&[f32]>)>,
+    hierarchy: Option<(&Hierarchy, Option<&ConstantCouplings>)>,
     springs: &[ContactSpring],
     settings: &ImplicitSettings,
     tolerance: f32,
@@ -753,13 +753,12 @@ fn conjugate_gradient(
         ..
     } = ws;
     let weights = *spring_weights;
+    let far = hierarchy.and_then(|(_, couplings)| couplings).filter(|c| c.has_rows(filter.len()));
+    let far = far.map(|couplings| WeightedCouplings { couplings, weight: weights.stiffness });
     if !*prepared {
         let preparing = Instant::now();
         match hierarchy {
-            Some((hierarchy, lumps)) => {
-                let lumps = lumps.map(|per_row| ConstantLumps { per_row, weight: weights.stiffness });
-                multigrid.prepare(hierarchy, pattern, system, filter, x, lumps);
-            }
+            Some((hierarchy, _)) => multigrid.prepare(hierarchy, pattern, system, filter, x, far),
             None => (0..filter.len())
                 .into_par_iter()
                 .with_min_len(PARALLEL_MIN_LEN)
@@ -774,7 +773,7 @@ fn conjugate_gradient(
     }
     let (filter, rhs) = (&*filter, &*rhs);
     // z = M⁻¹ r, returning r·z.
-    let mut precondition = |r: &[Vec3], z: &mut [Vec3], partials: &mut Vec<f64>| {
+    let precondition = |multigrid: &mut Multigrid, r: &[Vec3], z: &mut [Vec3], partials: &mut Vec<f64>| {
         if let Some((hierarchy, _)) = hierarchy {
             multigrid.apply(hierarchy, filter, r, z);
         }
@@ -793,7 +792,7 @@ fn conjugate_gradient(
         *r = filter.apply(i, rhs[i] - q);
         f64::from(r.length_squared())
     });
-    let mut rz = precondition(residual, preconditioned, partials);
+    let mut rz = precondition(multigrid, residual, preconditioned, partials);
     direction.copy_from_slice(preconditioned);
     rhs.par_chunks(C)
         .enumerate()
@@ -804,12 +803,26 @@ fn conjugate_gradient(
         if rr <= target {
             return iteration;
         }
-        // q = S A d, and d·q.
-        multiply_system(system, pattern, springs, weights, direction, product);
-        let curvature = fused(product, direction, partials, |i, q, d| {
-            *q = filter.apply(i, *q);
-            f64::from(d.dot(*q))
-        });
+        // q = S A d, and d·q: with constant couplings outside the multigrid's finest
+        // level, its matrix's product and theirs row by row.
+        let curvature = match (hierarchy, far) {
+            (Some((hierarchy, _)), Some(far)) => {
+                multigrid.multiply_finest(hierarchy, direction, product);
+                contact_springs::add_product(springs, weights, Blocks::OffDiagonal, direction, product);
+                let direction = &*direction;
+                fused(product, direction, partials, |i, q, d| {
+                    *q = filter.apply(i, *q + far.row_product(i, direction));
+                    f64::from(d.dot(*q))
+                })
+            }
+            _ => {
+                multiply_system(system, pattern, springs, weights, direction, product);
+                fused(product, direction, partials, |i, q, d| {
+                    *q = filter.apply(i, *q);
+                    f64::from(d.dot(*q))
+                })
+            }
+        };
         if curvature <= 0.0 {
             return iteration;
         }
@@ -828,7 +841,7 @@ fn conjugate_gradient(
             })
             .collect_into_vec(partials);
         rr = total(partials);
-        let next = precondition(residual, preconditioned, partials);
+        let next = precondition(multigrid, residual, preconditioned, partials);
         let ratio = (next / rz) as f32;
         rz = next;
         direction.par_iter_mut().zip(preconditioned.par_iter()).with_min_len(PARALLEL_MIN_LEN).for_each(|(d, z)| {

@@ -218,30 +218,47 @@ impl Hierarchy {
         Self { fine: fine.with_upper(), coarsest: current.rows(), coarsenings }
     }
 
-    /// Per row of `pattern` (the system's), what [`lump`] moves onto its diagonal, as a
-    /// multiple of `I` per unit stiffness weight, from a system whose blocks outside the
-    /// finest pattern are its stiffness weight times `−s I`, one `s` per block of
-    /// ∂f/∂x's storage in `scales`: the quadratic bending's constant Jacobian, which alone
-    /// couples particles across an edge. A lump is positively homogeneous in its block, so
-    /// the system's is this times its weight ([`ConstantLumps`]), found once per topology.
-    pub fn constant_lumps(&self, pattern: &BlockPattern, scales: &[f32], out: &mut Vec<f32>) {
+    /// The system's couplings outside the finest pattern, from `scales`, one per block of
+    /// the storage of ∂f/∂x over `pattern` (the system's), where ∂f/∂x's blocks there are
+    /// `s I` (the quadratic bending's constant Jacobian): their rows, and what [`lump`]
+    /// moves onto each diagonal from the system's blocks `−w s I` per unit stiffness
+    /// weight `w`. A lump is positively homogeneous in its block, so the system's is that
+    /// times its weight.
+    pub fn constant_couplings(&self, pattern: &BlockPattern, scales: &[f32], out: &mut ConstantCouplings) {
+        let ConstantCouplings { lumps, offsets, columns, scales: kept } = out;
+        // Row `i`'s couplings outside the finest pattern, columns ascending, as
+        // `(column, s)`.
+        let far = |i: usize| {
+            let (row, fine) = (pattern.symmetric_row(i), self.fine.row(i));
+            let slots = row.mirrors.iter().map(|&m| m as usize).chain(row.storage);
+            row.below
+                .iter()
+                .chain(row.above)
+                .zip(slots)
+                .filter(move |(column, _)| fine.binary_search(column).is_err())
+                .map(|(&column, slot)| (column, scales[slot]))
+        };
         (0..pattern.rows())
             .into_par_iter()
             .with_min_len(PARALLEL_MIN_LEN)
             .map(|i| {
-                let (row, columns) = (pattern.symmetric_row(i), self.fine.row(i));
-                let slots = row.mirrors.iter().map(|&m| m as usize).chain(row.storage);
-                row.below
-                    .iter()
-                    .chain(row.above)
-                    .zip(slots)
-                    .filter(|(column, _)| columns.binary_search(column).is_err())
-                    .fold(0.0, |moved, (_, slot)| {
-                        let block = Mat3::from_diagonal(Vec3::splat(-scales[slot]));
-                        moved + block.x_axis.x + lumping_shift(block, block)
-                    })
+                far(i).fold(0.0, |moved, (_, s)| {
+                    let block = Mat3::from_diagonal(Vec3::splat(-s));
+                    moved + block.x_axis.x + lumping_shift(block, block)
+                })
             })
-            .collect_into_vec(out);
+            .collect_into_vec(lumps);
+        offsets.clear();
+        columns.clear();
+        kept.clear();
+        offsets.push(0);
+        for i in 0..pattern.rows() {
+            for (column, s) in far(i) {
+                columns.push(column);
+                kept.push(s);
+            }
+            offsets.push(columns.len() as u32);
+        }
     }
 
     /// Nodes per level, finest first.
@@ -784,15 +801,15 @@ fn lump(
 }
 
 /// [`lump`] for a system whose blocks outside `fine` are its stiffness weight times
-/// constant ones, whose lumps per unit weight are known ([`Hierarchy::constant_lumps`]):
+/// constant ones, whose lumps per unit weight are known ([`Hierarchy::constant_couplings`]):
 /// the blocks `fine` has, copied, and each row's lump added to its diagonal, without
 /// visiting the blocks left out. The shifts and the walk over every block took [`lump`]
-/// 0.26 ms of a 4.3 ms hang_64 frame; this copy takes a fourth of the blocks.
+/// 0.26 ms of a 4.4 ms hang_64 frame; this copy takes a fourth of the blocks.
 fn lump_constant(
     pattern: &BlockPattern,
     system: &SymmetricBlockMatrix,
     fine: &BlockPattern,
-    lumps: ConstantLumps<'_>,
+    far: WeightedCouplings<'_>,
     out: &mut SymmetricBlockMatrix,
 ) {
     out.reset(fine);
@@ -806,19 +823,58 @@ fn lump_constant(
             *block = system.blocks[whole.storage.start + at];
         }
         // The diagonal block is the first stored.
-        blocks[0] += Mat3::from_diagonal(Vec3::splat(lumps.weight * lumps.per_row[i]));
+        blocks[0] += Mat3::from_diagonal(Vec3::splat(far.weight * far.couplings.lumps[i]));
     });
 }
 
-/// What the blocks outside the finest pattern lump onto each diagonal when they are a
-/// known weight times constant blocks ([`Hierarchy::constant_lumps`]), as under the
-/// quadratic bending law.
+/// The system's couplings outside the finest pattern where they are its stiffness weight
+/// times constant blocks `−s I`: the quadratic bending's, which alone couple particles
+/// across an edge. Found once per topology ([`Hierarchy::constant_couplings`]), they
+/// spare [`lump`] its walk over the system's wider rows and its shifts, and the
+/// conjugate gradients' products the system's 19 blocks a row on a regular sheet: those
+/// take the finest level's 7, less their lumps, and these 12 as scalars
+/// ([`Multigrid::multiply_finest`], [`WeightedCouplings::row_product`]).
+#[derive(Debug, Clone, Default)]
+pub struct ConstantCouplings {
+    /// Per particle, what [`lump`] moves onto its diagonal per unit weight, as a
+    /// multiple of `I`.
+    lumps: Vec<f32>,
+    /// Particle `i`'s couplings are `columns` and `scales` from `offsets[i]` to
+    /// `offsets[i + 1]`, columns ascending.
+    offsets: Vec<u32>,
+    columns: Vec<u32>,
+    scales: Vec<f32>,
+}
+
+impl ConstantCouplings {
+    /// Whether these are a system's of `rows` particles.
+    pub fn has_rows(&self, rows: usize) -> bool {
+        self.lumps.len() == rows
+    }
+}
+
+/// [`ConstantCouplings`] with the system's stiffness weight.
 #[derive(Debug, Clone, Copy)]
-pub struct ConstantLumps<'a> {
-    /// Per particle, the lump per unit weight.
-    pub per_row: &'a [f32],
-    /// The system's weight of the stiffness: `hβ + h²θ²`.
+pub struct WeightedCouplings<'a> {
+    /// The couplings per unit weight.
+    pub couplings: &'a ConstantCouplings,
+    /// `hβ + h²θ²`.
     pub weight: f32,
+}
+
+impl WeightedCouplings<'_> {
+    /// Row `i` of the system times `x` less that of the finest level's lumped matrix:
+    /// `−w (l_i x_i + Σ_j s_ij x_j)`, `l_i` the row's lump.
+    #[inline]
+    pub fn row_product(&self, i: usize, x: &[Vec3]) -> Vec3 {
+        let c = self.couplings;
+        let range = c.offsets[i] as usize..c.offsets[i + 1] as usize;
+        let far = c.columns[range.clone()]
+            .iter()
+            .zip(&c.scales[range])
+            .fold(Vec3::ZERO, |sum, (&j, &s)| sum + s * x[j as usize]);
+        -self.weight * (c.lumps[i] * x[i] + far)
+    }
 }
 
 /// `(B + Bᵀ) / 2`, the same for a block and its transpose.
@@ -1192,7 +1248,7 @@ impl Multigrid {
     /// ([`lump`]): a third of the blocks (7 of 19 a row on a regular sheet, 4 of 10
     /// stored), for each of the cycle's smoothing products and for the Galerkin product,
     /// at a frame-sized step where the bending is some 10⁻⁴ of the membrane's stiffness.
-    /// Given `lumps`, those couplings are a known weight times constant blocks, and their
+    /// Given `far`, those couplings are a known weight times constant blocks, and their
     /// lumps come from it instead of the system's blocks ([`lump_constant`]).
     pub fn prepare(
         &mut self,
@@ -1201,10 +1257,10 @@ impl Multigrid {
         system: &SymmetricBlockMatrix,
         filter: &Filters,
         positions: &[Vec3],
-        lumps: Option<ConstantLumps<'_>>,
+        far: Option<WeightedCouplings<'_>>,
     ) {
-        match lumps {
-            Some(lumps) => lump_constant(pattern, system, &hierarchy.fine, lumps, &mut self.fine),
+        match far {
+            Some(far) => lump_constant(pattern, system, &hierarchy.fine, far, &mut self.fine),
             None => lump(pattern, system, &hierarchy.fine, &mut self.shifts, &mut self.fine),
         }
         let pattern = &hierarchy.fine;
@@ -1285,6 +1341,12 @@ impl Multigrid {
             _ => coarse_operator(&hierarchy.coarsenings[depth - 1].coarse, &self.matrices[depth - 1]),
         };
         self.coarsest.factorize(coarsest);
+    }
+
+    /// `out = L x`, `L` the finest level's matrix as [`Multigrid::prepare`] left it:
+    /// with [`WeightedCouplings::row_product`] added row by row, the system's product.
+    pub fn multiply_finest(&self, hierarchy: &Hierarchy, x: &[Vec3], out: &mut [Vec3]) {
+        self.fine.multiply(&hierarchy.fine, x, out);
     }
 
     /// One symmetric V-cycle on the finest level's residual `r` (filtered), giving the
@@ -1518,7 +1580,7 @@ mod tests {
 
     /// Blocks outside the finest pattern that are a weight times constant `−s I` (the
     /// quadratic bending's) lump, from their lumps per unit weight, as the system's own
-    /// blocks do: here a sheet's diagonal edges, of either sign, left out of its finest
+    /// blocks do, and the lumped matrix's product with their rows is the system's: here a sheet's diagonal edges, of either sign, left out of its finest
     /// level of horizontal and vertical edges.
     #[test]
     fn constant_couplings_lump_as_their_blocks_do() {
@@ -1549,14 +1611,24 @@ mod tests {
         let (mut shifts, mut expected, mut lumped) =
             (Vec::new(), SymmetricBlockMatrix::default(), SymmetricBlockMatrix::default());
         lump(&pattern, &system, &hierarchy.fine, &mut shifts, &mut expected);
-        let mut per_row = Vec::new();
-        hierarchy.constant_lumps(&pattern, &scales, &mut per_row);
-        lump_constant(&pattern, &system, &hierarchy.fine, ConstantLumps { per_row: &per_row, weight }, &mut lumped);
+        let mut couplings = ConstantCouplings::default();
+        hierarchy.constant_couplings(&pattern, &scales, &mut couplings);
+        let far = WeightedCouplings { couplings: &couplings, weight };
+        lump_constant(&pattern, &system, &hierarchy.fine, far, &mut lumped);
         assert_eq!(lumped.blocks.len(), expected.blocks.len());
-        let moved = per_row.iter().map(|l| l.abs()).fold(0.0, f32::max);
+        let moved = couplings.lumps.iter().map(|l| l.abs()).fold(0.0, f32::max);
         assert!(moved > 0.1, "the diagonal edges move {moved} onto a diagonal");
         for (k, (a, b)) in lumped.blocks.iter().zip(&expected.blocks).enumerate() {
             assert!(frobenius(*a - *b) <= 1e-5 * frobenius(*b), "block {k}: {a} against {b}");
+        }
+        // The lumped matrix's product, with the couplings' rows, is the system's.
+        let x: Vec<Vec3> = (0..pattern.rows() as u32).map(irregular).collect();
+        let (mut exact, mut product) = (vec![Vec3::ZERO; x.len()], vec![Vec3::ZERO; x.len()]);
+        system.multiply(&pattern, &x, &mut exact);
+        lumped.multiply(&hierarchy.fine, &x, &mut product);
+        for (i, (exact, product)) in exact.iter().zip(&product).enumerate() {
+            let product = *product + far.row_product(i, &x);
+            assert!((product - *exact).length() <= 1e-4, "row {i}: {product} against {exact}");
         }
     }
 
