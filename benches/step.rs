@@ -17,6 +17,7 @@ use selvedge::solver::descent::{DescentSettings, DescentWorkspace, descend};
 use selvedge::solver::elements::{SymmetricBlockMatrix, VelocityJacobian};
 use selvedge::solver::filter::Filters;
 use selvedge::solver::forces::{Air, ClothDynamics, ForceModel, ForceScratch};
+use selvedge::solver::implicit::StepSystem;
 use selvedge::solver::integrate::{Integrator, IntegratorWorkspace, MethodSettings, step};
 use selvedge::solver::probes::most_stretched_edge;
 
@@ -168,9 +169,8 @@ fn kernels(c: &mut Criterion) {
         group.bench_function(BenchmarkId::new("descent_sweep", &size), |b| {
             on_pool(b, || {
                 descend(
-                    pattern,
+                    StepSystem::new(pattern, &system),
                     &topology.colouring,
-                    &system,
                     &rhs,
                     &filter,
                     &one_sweep,

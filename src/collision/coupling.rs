@@ -228,7 +228,7 @@ impl PropCoupling {
                 continue;
             };
             let i = ci.particle as usize;
-            system.matrix.for_row(system.pattern, i, |j, block, _| {
+            system.for_row(i, |j, block| {
                 let Ok(k) = constraints.binary_search_by_key(&j, |c| c.particle) else {
                     return;
                 };

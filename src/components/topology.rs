@@ -88,7 +88,9 @@ pub struct ClothTopology {
     pub hinge_faces: Csr,
     /// Membrane corners `3 t + c` at each particle.
     pub particle_membranes: Csr,
-    /// Which 3×3 blocks the derivatives ∂f/∂x and ∂f/∂v have.
+    /// Which 3×3 blocks the derivatives ∂f/∂x and ∂f/∂v have: every coupling, or under
+    /// quadratic bending those within a spring or a triangle (its couplings across an
+    /// edge are scalars, `ConstantCouplings`, found with its Jacobian).
     pub pattern: BlockPattern,
     /// Where each spring's local blocks go in the pattern, as positions within their rows
     /// ([`BlockPattern::upper_positions`]).
@@ -121,7 +123,8 @@ impl ClothTopology {
         builds: u32,
     ) -> Self {
         let count = inv_mass.len();
-        let pattern = BlockPattern::from_stencils(
+        // Every coupling, the bending faces' across an edge among them.
+        let whole = BlockPattern::from_stencils(
             count,
             springs
                 .pairs
@@ -129,11 +132,25 @@ impl ClothTopology {
                 .map(|p| &p[..])
                 .chain(hinges.faces.iter().map(|f| &f.vertices[..]))
                 .chain(membranes.indices.iter().map(|t| &t[..])),
-        )
-        .with_upper();
+        );
+        // Those of particles that share a spring or a triangle: the multigrid's finest
+        // level's.
+        let near = BlockPattern::from_stencils(
+            count,
+            springs
+                .pairs
+                .iter()
+                .map(|p| &p[..])
+                .chain(triangles.indices.iter().chain(&membranes.indices).map(|t| &t[..])),
+        );
         // Hinge forces and face blocks gathered from their angles, unless the bending is
-        // quadratic.
+        // quadratic, whose couplings across an edge are constant and kept apart.
         let by_angles = !hinges.is_quadratic();
+        let (colouring, hierarchy) = (Colouring::greedy(&whole), Hierarchy::build(&whole, near.clone()));
+        let pattern = match by_angles {
+            true => whole.with_upper(),
+            false => near.with_upper(),
+        };
         let mut free_inv_mass = inv_mass.to_vec();
         for &p in pinned {
             free_inv_mass[p as usize] = 0.0;
@@ -159,18 +176,8 @@ impl ClothTopology {
                 false => ElementPositions::default(),
             },
             membrane_positions: ElementPositions::new(&pattern, membranes.indices.iter().copied()),
-            colouring: Colouring::greedy(&pattern),
-            hierarchy: Hierarchy::build(
-                &pattern,
-                BlockPattern::from_stencils(
-                    count,
-                    springs
-                        .pairs
-                        .iter()
-                        .map(|p| &p[..])
-                        .chain(triangles.indices.iter().chain(&membranes.indices).map(|t| &t[..])),
-                ),
-            ),
+            colouring,
+            hierarchy,
             pattern,
             free_inv_mass,
             builds,

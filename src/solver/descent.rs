@@ -32,8 +32,9 @@
 use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
-use super::elements::{BlockPattern, SymmetricBlockMatrix};
+use super::elements::BlockPattern;
 use super::filter::{Filters, filtered_inverse};
+use super::implicit::StepSystem;
 use crate::collision::motion_bounds::Bound;
 
 /// Rows per parallel task in a colour: a row is a few hundred flops, and colours are a
@@ -315,9 +316,8 @@ fn reach(bound: &Bound, anchor: Vec3, offset: Vec3) -> f32 {
 /// advances towards the start ([`advance_anchor`]).
 #[allow(clippy::too_many_arguments)]
 pub fn descend(
-    pattern: &BlockPattern,
+    system: StepSystem<'_>,
     colouring: &Colouring,
-    system: &SymmetricBlockMatrix,
     rhs: &[Vec3],
     filter: &Filters,
     settings: &DescentSettings,
@@ -328,7 +328,7 @@ pub fn descend(
 ) -> u32 {
     let n = delta.len();
     ws.step.clear();
-    ws.step.extend((0..n).map(|i| filtered_inverse(filter.block(i), system.diagonal(pattern, i))));
+    ws.step.extend((0..n).map(|i| filtered_inverse(filter.block(i), system.diagonal(i))));
     ws.previous.resize(n, Vec3::ZERO);
     ws.before.resize(n, Vec3::ZERO);
     // The longest move the bounds are asked to allow: the farthest the start took a
@@ -358,7 +358,7 @@ pub fn descend(
             let frame = motion.as_ref().map(BoundedMotion::frame);
             ws.update.par_iter_mut().zip(rows.par_iter()).with_min_len(ROWS_PER_TASK).for_each(|(update, &i)| {
                 let i = i as usize;
-                let r = filter.apply(i, rhs[i] - system.row_product(pattern, i, current));
+                let r = filter.apply(i, rhs[i] - system.row_product(i, current));
                 let (correction, r, cut) = match frame {
                     Some(f) => f.newton_step(i, current[i], step[i], r, &bounds[i], filter.is_free(i)),
                     None => (step[i] * r, r, false),
@@ -433,6 +433,7 @@ mod tests {
     use crate::collision::motion_bounds::tests::{Lcg, any_crossing, two_layers};
     use crate::collision::motion_bounds::{MotionBounds, Surface};
     use crate::collision::self_contact::ContactMesh;
+    use crate::solver::elements::SymmetricBlockMatrix;
 
     /// A chain of `n` particles joined by springs of stiffness `k`, mass `m`, as the
     /// system `M + k L` of an implicit step, block-diagonal in the axes.
@@ -545,7 +546,17 @@ mod tests {
             delta[n - 1] = Vec3::new(0.25, 0.0, 0.0);
             let settings = DescentSettings { sweeps, spectral_radius, contact_bounds: false };
             let mut ws = DescentWorkspace::default();
-            descend(&pattern, &colouring, &system, &rhs, &filter, &settings, 0.0, None, &mut delta, &mut ws);
+            descend(
+                StepSystem::new(&pattern, &system),
+                &colouring,
+                &rhs,
+                &filter,
+                &settings,
+                0.0,
+                None,
+                &mut delta,
+                &mut ws,
+            );
             assert_eq!(delta[0], Vec3::ZERO, "the pin moved");
             assert_eq!(delta[n - 1].x, 0.25, "the prescribed normal part moved");
             delta.iter().zip(&exact).map(|(d, e)| (*d - *e).length()).fold(0.0f32, f32::max)
@@ -580,7 +591,17 @@ mod tests {
                 body_bounds::limit(std::slice::from_ref(&sphere), x, out);
             };
             let motion = bounded.then(|| BoundedMotion { base: &x0, scale: h, anchor: &mut anchor, bound: &mut bound });
-            descend(&pattern, &colouring, &system, &rhs, &filter, &settings, 0.0, motion, &mut delta, &mut ws);
+            descend(
+                StepSystem::new(&pattern, &system),
+                &colouring,
+                &rhs,
+                &filter,
+                &settings,
+                0.0,
+                motion,
+                &mut delta,
+                &mut ws,
+            );
             x0.iter().zip(&delta).map(|(x, d)| *x + h * *d).collect()
         };
         let clearance = |x: &[Vec3]| x.iter().map(|p| p.distance(centre) - radius).fold(f32::INFINITY, f32::min);
@@ -619,7 +640,17 @@ mod tests {
             let (mut search, mut anchor) = (MotionBounds::default(), x0.clone());
             let mut bound = |x: &[Vec3], wanted: f32, out: &mut [Bound]| search.compute(surface, x, wanted, out);
             let motion = bounded.then(|| BoundedMotion { base: &x0, scale: h, anchor: &mut anchor, bound: &mut bound });
-            descend(&pattern, &colouring, &system, &rhs, &filter, &settings, 0.0, motion, &mut delta, &mut ws);
+            descend(
+                StepSystem::new(&pattern, &system),
+                &colouring,
+                &rhs,
+                &filter,
+                &settings,
+                0.0,
+                motion,
+                &mut delta,
+                &mut ws,
+            );
             x0.iter().zip(&delta).map(|(x, d)| *x + h * *d).collect()
         };
         let path = |bounded: bool| -> Vec<Vec<Vec3>> {

@@ -88,16 +88,17 @@ pub struct ForceScratch {
     quadratic: QuadraticBlocks,
 }
 
-/// Quadratic bending's Jacobian over the topology's pattern, constant: for each stored
-/// block the `s` of its `s I`, summed face by face once per topology, which the
-/// derivatives start from instead of zero. Added face by face in every step, its 21
-/// blocks a face took 0.5 ms of the 64² hang scene's 1.5 ms assembly.
+/// Quadratic bending's Jacobian, constant: for each block the topology's pattern stores
+/// (those within a triangle: the pattern leaves out the faces' couplings across an edge)
+/// the `s` of its `s I`, which the derivatives start from instead of zero, and the
+/// couplings across an edge as [`ConstantCouplings`]; summed face by face once per
+/// topology. Added face by face in every step, its 21 blocks a face took 0.5 ms of the
+/// 64² hang scene's 1.5 ms assembly.
 #[derive(Debug, Clone, Default)]
 struct QuadraticBlocks {
     /// The topology's build and the number of faces the scales were found for.
     key: Option<(u32, usize)>,
     scales: Vec<f32>,
-    /// The scales outside the multigrid's finest pattern, by rows, and their lumps.
     couplings: ConstantCouplings,
 }
 
@@ -115,19 +116,22 @@ impl QuadraticBlocks {
             let pattern = &topology.pattern;
             self.scales.clear();
             self.scales.resize(pattern.upper.last().map_or(0, |&size| size as usize), 0.0);
-            let bending = hinges.view();
+            let (bending, mut across) = (hinges.view(), Vec::new());
             for (f, face) in hinges.faces.iter().enumerate() {
-                let slots = pattern.upper_slots_at(face.vertices, &pattern.upper_positions::<6, 21>(face.vertices));
-                for (scale, slot) in bending.quadratic_jacobian(f).into_iter().zip(slots) {
-                    self.scales[slot as usize] += scale;
+                let pairs = upper_pairs::<6>().map(|(a, b)| (face.vertices[a], face.vertices[b]));
+                for ((p, q), scale) in pairs.zip(bending.quadratic_jacobian(f)) {
+                    match pattern.upper_index(p, q) {
+                        Some(slot) => self.scales[slot as usize] += scale,
+                        None => across.extend([(p, q, scale), (q, p, scale)]),
+                    }
                 }
             }
-            topology.hierarchy.constant_couplings(pattern, &self.scales, &mut self.couplings);
+            self.couplings = ConstantCouplings::new(pattern.rows(), across);
         }
         &self.scales
     }
 
-    /// The couplings of the scales last refreshed for `model`, if its bending is quadratic.
+    /// The couplings across an edge last found for `model`, if its bending is quadratic.
     fn couplings(&self, model: &ForceModel<'_>) -> Option<&ConstantCouplings> {
         let current =
             model.hinges.is_quadratic() && self.key == Some((model.topology.builds, model.hinges.faces.len()));
@@ -379,15 +383,15 @@ impl ForceModel<'_> {
     }
 
     /// Quadratic bending's force on particle `i` at `x`: row `i` of its constant
-    /// Jacobian `scales` ([`QuadraticBlocks`]) times the other particles' offsets from
-    /// `x_i`, `Σ_j s_ij (x_j − x_i)`, which is `J x` since the blocks of a row sum to
-    /// zero, and is the same to the bit for a translated cloth. Row by row, some 20
+    /// Jacobian (`quadratic`: [`QuadraticBlocks`]) times the other particles' offsets
+    /// from `x_i`, `Σ_j s_ij (x_j − x_i)`, which is `J x` since the blocks of a row sum
+    /// to zero, and is the same to the bit for a translated cloth. Row by row, some 20
     /// products a particle where the faces' own forces took some 150 operations a face.
-    fn quadratic_bending(&self, i: usize, x: &[Vec3], scales: &[f32]) -> Vec3 {
+    fn quadratic_bending(&self, i: usize, x: &[Vec3], quadratic: &QuadraticBlocks) -> Vec3 {
         let row = self.topology.pattern.symmetric_row(i);
-        let offsets =
-            row.below.iter().zip(row.mirrors.iter().map(|&m| m as usize)).chain(row.above.iter().zip(row.storage));
-        offsets.fold(Vec3::ZERO, |sum, (&j, slot)| sum + scales[slot] * (x[j as usize] - x[i]))
+        let slots = row.mirrors.iter().map(|&m| m as usize).chain(row.storage);
+        let within = row.below.iter().chain(row.above).zip(slots).map(|(&j, slot)| (j, quadratic.scales[slot]));
+        within.chain(quadratic.couplings.row(i)).fold(Vec3::ZERO, |sum, (j, s)| sum + s * (x[j as usize] - x[i]))
     }
 
     /// Adds the wind's force on particle `i` to its `total`, triangle by triangle.
@@ -436,7 +440,8 @@ impl ForceModel<'_> {
             }
         }
         let ForceScratch { hinge_delta, quadratic: blocks, .. } = scratch;
-        let scales = blocks.refresh(self);
+        blocks.refresh(self);
+        let blocks = &*blocks;
         let local = LocalForces { model: self, x, v, wind: self.air.wind_at(t), delta: hinge_delta };
         let rate = self.damping_rate();
         particles.map(move |p| {
@@ -447,7 +452,7 @@ impl ForceModel<'_> {
                 total += self.membrane_forces(corner as usize / 3, x)[corner as usize % 3];
             }
             if quadratic {
-                total += self.quadratic_bending(i, x, scales);
+                total += self.quadratic_bending(i, x, blocks);
             }
             self.add_wind(i, &mut total, &local);
             user.fold(total, |total, f| total + f)
@@ -485,7 +490,6 @@ impl ForceModel<'_> {
         scratch.row_parts.refresh(self, false);
         scratch.quadratic.refresh(self);
         let scratch = &*scratch;
-        let scales = scratch.quadratic.scales.as_slice();
         let (rate, parts) = (self.damping_rate(), &scratch.row_parts);
         by_parts(out, &parts.bounds, |part, rows, out| {
             for (i, f) in rows.clone().zip(out.iter_mut()) {
@@ -501,7 +505,7 @@ impl ForceModel<'_> {
             }
             if quadratic {
                 for (i, f) in rows.clone().zip(out.iter_mut()) {
-                    *f += self.quadratic_bending(i, x, scales);
+                    *f += self.quadratic_bending(i, x, &scratch.quadratic);
                 }
             }
             for (i, f) in rows.zip(out.iter_mut()) {
@@ -861,7 +865,10 @@ mod tests {
                     let numeric_x = (fxp[a] - fxm[a]) / (2.0 * h);
                     let numeric_v = (fvp[a] - fvm[a]) / (1000.0 * h);
                     let (a, b) = (a as u32, b as u32);
-                    let analytic_x = dfdx.block(&topology.pattern, a, b).col(axis);
+                    let across =
+                        scratch.quadratic.couplings(&model).and_then(|c| c.row(a as usize).find(|&(j, _)| j == b));
+                    let across = Mat3::from_diagonal(Vec3::splat(across.map_or(0.0, |(_, s)| s)));
+                    let analytic_x = (dfdx.block(&topology.pattern, a, b) + across).col(axis);
                     let analytic_v = dfdv.block(&topology.pattern, a, b).col(axis);
                     let scale = numeric_x.length().max(analytic_x.length()).max(1.0);
                     assert!(

@@ -225,8 +225,75 @@ const MAX_BODY_ITERATIONS: usize = 12;
 pub struct StepSystem<'a> {
     /// Which blocks exist.
     pub pattern: &'a BlockPattern,
-    /// `A = (1 + hα) M − h ∂f/∂v − (hβ + h²θ²) ∂f/∂x`.
+    /// `A = (1 + hα) M − h ∂f/∂v − (hβ + h²θ²) ∂f/∂x`, over the pattern.
     pub matrix: &'a SymmetricBlockMatrix,
+    /// Its constant couplings outside the pattern, if any (the quadratic bending's across
+    /// an edge).
+    pub far: Option<WeightedCouplings<'a>>,
+}
+
+impl<'a> StepSystem<'a> {
+    /// The system of `matrix` over `pattern`, with nothing outside it.
+    pub fn new(pattern: &'a BlockPattern, matrix: &'a SymmetricBlockMatrix) -> Self {
+        Self { pattern, matrix, far: None }
+    }
+
+    /// The system of `matrix` over `pattern` with `couplings` outside it, if any, at
+    /// `weight`.
+    fn with_couplings(
+        pattern: &'a BlockPattern,
+        matrix: &'a SymmetricBlockMatrix,
+        couplings: Option<&'a ConstantCouplings>,
+        weight: f32,
+    ) -> Self {
+        let far = couplings.filter(|c| c.has_rows(pattern.rows())).map(|c| c.weighted(weight));
+        Self { pattern, matrix, far }
+    }
+
+    /// The diagonal block of particle `i`.
+    pub fn diagonal(&self, i: usize) -> Mat3 {
+        self.matrix.diagonal(self.pattern, i)
+    }
+
+    /// Row `i` times `x`.
+    #[inline]
+    pub fn row_product(&self, i: usize, x: &[Vec3]) -> Vec3 {
+        let within = self.matrix.row_product(self.pattern, i, x);
+        self.far.map_or(within, |far| within + far.row_product(i, x))
+    }
+
+    /// Calls `visit(column, block)` for every block of row `i`: the pattern's, columns
+    /// ascending, then the couplings outside it.
+    pub fn for_row(&self, i: usize, mut visit: impl FnMut(u32, Mat3)) {
+        self.matrix.for_row(self.pattern, i, |j, block, _| visit(j, block));
+        if let Some(far) = self.far {
+            far.for_row(i, visit);
+        }
+    }
+
+    /// `out = A y`.
+    fn multiply(&self, y: &[Vec3], out: &mut [Vec3]) {
+        self.matrix.multiply(self.pattern, y, out);
+        if let Some(far) = self.far {
+            add_rows(out, |i| far.row_product(i, y));
+        }
+    }
+}
+
+/// Adds `row(i)` to each `out[i]`, in parallel.
+fn add_rows(out: &mut [Vec3], row: impl Fn(usize) -> Vec3 + Sync) {
+    out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, out)| *out += row(i));
+}
+
+/// The system of `matrix` over `dynamics`' pattern at stiffness weight `stiffness`, with
+/// the dynamics' constant couplings outside the pattern (∂f/∂x's at weight 1, the
+/// system's at `−(hβ + h²θ²)`).
+fn step_system<'a>(
+    dynamics: &'a impl LinearDynamics,
+    matrix: &'a SymmetricBlockMatrix,
+    stiffness: f32,
+) -> StepSystem<'a> {
+    StepSystem::with_couplings(dynamics.pattern(), matrix, dynamics.constant_couplings(), stiffness)
 }
 
 /// Relative size of a Newton correction below which the step counts as converged.
@@ -294,7 +361,7 @@ pub fn implicit_step(
     let assembly = Instant::now();
     ws.dfdx = std::mem::take(&mut ws.system);
     dynamics.linearize(x, v, t, &mut ws.force, &mut ws.dfdx, &mut ws.dfdv);
-    ws.dfdx.multiply(dynamics.pattern(), v, &mut ws.product);
+    step_system(dynamics, &ws.dfdx, 1.0).multiply(v, &mut ws.product);
     let springs = springs_of(settings, dynamics);
     contact_springs::add_forces(springs, x, v, &mut ws.force);
     contact_springs::add_product(springs, STIFFNESS, Blocks::All, v, &mut ws.product);
@@ -319,7 +386,7 @@ pub fn implicit_step(
     // the velocities their balance asks for, until they settle.
     if let Some(bodies) = bodies {
         for _ in 0..MAX_BODY_ITERATIONS {
-            let system = StepSystem { pattern: dynamics.pattern(), matrix: &ws.system };
+            let system = step_system(dynamics, &ws.system, -ws.spring_weights.stiffness);
             if !bodies.rebalance(system, constraints, &ws.constraint_impulses) {
                 break;
             }
@@ -359,12 +426,12 @@ pub fn implicit_step(
         let assembly = Instant::now();
         ws.dfdx = std::mem::take(&mut ws.system);
         dynamics.linearize(&ws.x, &ws.v, t + h, &mut ws.force, &mut ws.dfdx, &mut ws.dfdv);
-        let pattern = dynamics.pattern();
-        ws.dfdx.multiply(pattern, &ws.v, &mut ws.product);
+        let stiffness = step_system(dynamics, &ws.dfdx, 1.0);
+        stiffness.multiply(&ws.v, &mut ws.product);
         // The damping change over the step, D Δv, which the end-of-step damping weighs by
         // 1 rather than θ: D = ∂f/∂v − αM + βK.
-        ws.dfdv.multiply(pattern, &ws.dv, &mut ws.residual);
-        ws.dfdx.multiply(pattern, &ws.dv, &mut ws.preconditioned);
+        ws.dfdv.multiply(dynamics.pattern(), &ws.dv, &mut ws.residual);
+        stiffness.multiply(&ws.dv, &mut ws.preconditioned);
         let springs = springs_of(settings, dynamics);
         contact_springs::add_forces(springs, &ws.x, &ws.v, &mut ws.force);
         contact_springs::add_product(springs, STIFFNESS, Blocks::All, &ws.v, &mut ws.product);
@@ -381,7 +448,7 @@ pub fn implicit_step(
         build_system(settings, h, dynamics, ws);
         ws.stages.assembly += assembly.elapsed();
         report.iterations += solve(dynamics, settings, Start::Zero, settings.cg_tolerance, x, h * theta, ws);
-        add_constraint_impulses(dynamics.pattern(), springs_of(settings, dynamics), constraints, ws);
+        add_constraint_impulses(dynamics, settings, constraints, ws);
         for i in 0..n {
             ws.dv[i] += ws.delta[i];
         }
@@ -518,15 +585,8 @@ fn springs_of<'a>(settings: &ImplicitSettings, dynamics: &'a impl LinearDynamics
 
 /// `out = A y`: the matrix, and the contact springs' off-diagonal blocks weighted as
 /// stiffness and damping are in `A`.
-fn multiply_system(
-    system: &SymmetricBlockMatrix,
-    pattern: &BlockPattern,
-    springs: &[ContactSpring],
-    weights: Weights,
-    y: &[Vec3],
-    out: &mut [Vec3],
-) {
-    system.multiply(pattern, y, out);
+fn multiply_system(system: StepSystem<'_>, springs: &[ContactSpring], weights: Weights, y: &[Vec3], out: &mut [Vec3]) {
+    system.multiply(y, out);
     contact_springs::add_product(springs, weights, Blocks::OffDiagonal, y, out);
 }
 
@@ -544,21 +604,22 @@ fn set_constraint_impulses(
 ) {
     ws.constraint_impulses.clear();
     ws.constraint_impulses.resize(constraints.len(), Vec3::ZERO);
-    add_constraint_impulses(dynamics.pattern(), springs_of(settings, dynamics), constraints, ws);
+    add_constraint_impulses(dynamics, settings, constraints, ws);
 }
 
 /// Adds what each constraint had to supply in the last solve, `A δ − rhs` at its
 /// particle: the body's push that the filter stood in for.
 fn add_constraint_impulses(
-    pattern: &BlockPattern,
-    springs: &[ContactSpring],
+    dynamics: &impl LinearDynamics,
+    settings: &ImplicitSettings,
     constraints: &[VelocityConstraint],
     ws: &mut ImplicitWorkspace,
 ) {
     if constraints.is_empty() {
         return;
     }
-    multiply_system(&ws.system, pattern, springs, ws.spring_weights, &ws.delta, &mut ws.product);
+    let system = step_system(dynamics, &ws.system, -ws.spring_weights.stiffness);
+    multiply_system(system, springs_of(settings, dynamics), ws.spring_weights, &ws.delta, &mut ws.product);
     for (impulse, c) in ws.constraint_impulses.iter_mut().zip(constraints) {
         let i = c.particle as usize;
         *impulse += ws.product[i] - ws.rhs[i];
@@ -640,15 +701,15 @@ fn solve(
         Start::Zero => ws.delta.fill(Vec3::ZERO),
         Start::Given => {}
     }
-    let pattern = dynamics.pattern();
+    let (pattern, couplings, springs) =
+        (dynamics.pattern(), dynamics.constant_couplings(), springs_of(settings, dynamics));
     let iterations = match settings.linear_solver {
         LinearSolver::ConjugateGradient => {
-            conjugate_gradient(pattern, None, springs_of(settings, dynamics), settings, tolerance, x, ws)
+            conjugate_gradient(pattern, couplings, None, springs, settings, tolerance, x, ws)
         }
         LinearSolver::Multigrid => {
-            let hierarchy = Some((dynamics.hierarchy(), dynamics.constant_couplings()));
-            let springs = springs_of(settings, dynamics);
-            let iterations = conjugate_gradient(pattern, hierarchy, springs, settings, tolerance, x, ws);
+            let hierarchy = Some(dynamics.hierarchy());
+            let iterations = conjugate_gradient(pattern, couplings, hierarchy, springs, settings, tolerance, x, ws);
             // A looser solve's iterations say nothing of the levels' strength.
             if tolerance == settings.cg_tolerance {
                 ws.multigrid.record(iterations);
@@ -667,9 +728,8 @@ fn solve(
             });
             let motion = bound.as_mut().map(|bound| BoundedMotion { base, scale, anchor, bound });
             descend(
-                pattern,
+                StepSystem::with_couplings(pattern, &ws.system, couplings, -ws.spring_weights.stiffness),
                 dynamics.colouring(),
-                &ws.system,
                 &ws.rhs,
                 &ws.filter,
                 &descent,
@@ -727,7 +787,8 @@ fn fused(
 /// order.
 fn conjugate_gradient(
     pattern: &BlockPattern,
-    hierarchy: Option<(&Hierarchy, Option<&ConstantCouplings>)>,
+    couplings: Option<&ConstantCouplings>,
+    hierarchy: Option<&Hierarchy>,
     springs: &[ContactSpring],
     settings: &ImplicitSettings,
     tolerance: f32,
@@ -753,17 +814,16 @@ fn conjugate_gradient(
         ..
     } = ws;
     let weights = *spring_weights;
-    let far = hierarchy.and_then(|(_, couplings)| couplings).filter(|c| c.has_rows(filter.len()));
-    let far = far.map(|couplings| WeightedCouplings { couplings, weight: weights.stiffness });
+    let system = StepSystem::with_couplings(pattern, system, couplings, -weights.stiffness);
     if !*prepared {
         let preparing = Instant::now();
         match hierarchy {
-            Some((hierarchy, _)) => multigrid.prepare(hierarchy, pattern, system, filter, x, far),
+            Some(hierarchy) => multigrid.prepare(hierarchy, pattern, system.matrix, filter, x, system.far),
             None => (0..filter.len())
                 .into_par_iter()
                 .with_min_len(PARALLEL_MIN_LEN)
                 .map(|i| {
-                    let block = system.diagonal(pattern, i);
+                    let block = system.diagonal(i);
                     if block.determinant().abs() > 0.0 { block.inverse() } else { Mat3::IDENTITY }
                 })
                 .collect_into_vec(preconditioner),
@@ -774,7 +834,7 @@ fn conjugate_gradient(
     let (filter, rhs) = (&*filter, &*rhs);
     // z = M⁻¹ r, returning r·z.
     let precondition = |multigrid: &mut Multigrid, r: &[Vec3], z: &mut [Vec3], partials: &mut Vec<f64>| {
-        if let Some((hierarchy, _)) = hierarchy {
+        if let Some(hierarchy) = hierarchy {
             multigrid.apply(hierarchy, filter, r, z);
         }
         let jacobi = hierarchy.is_none().then_some(&*preconditioner);
@@ -787,7 +847,7 @@ fn conjugate_gradient(
     };
 
     // r = S (b − A δ), z = M⁻¹ r, d = z.
-    multiply_system(system, pattern, springs, weights, delta, product);
+    multiply_system(system, springs, weights, delta, product);
     let mut rr = fused(residual, product, partials, |i, r, q| {
         *r = filter.apply(i, rhs[i] - q);
         f64::from(r.length_squared())
@@ -805,18 +865,18 @@ fn conjugate_gradient(
         }
         // q = S A d, and d·q: with constant couplings outside the multigrid's finest
         // level, its matrix's product and theirs row by row.
-        let curvature = match (hierarchy, far) {
-            (Some((hierarchy, _)), Some(far)) => {
+        let curvature = match (hierarchy, system.far) {
+            (Some(hierarchy), Some(far)) => {
                 multigrid.multiply_finest(hierarchy, direction, product);
                 contact_springs::add_product(springs, weights, Blocks::OffDiagonal, direction, product);
                 let direction = &*direction;
                 fused(product, direction, partials, |i, q, d| {
-                    *q = filter.apply(i, *q + far.row_product(i, direction));
+                    *q = filter.apply(i, *q + far.row_product_beyond_lump(i, direction));
                     f64::from(d.dot(*q))
                 })
             }
             _ => {
-                multiply_system(system, pattern, springs, weights, direction, product);
+                multiply_system(system, springs, weights, direction, product);
                 fused(product, direction, partials, |i, q, d| {
                     *q = filter.apply(i, *q);
                     f64::from(d.dot(*q))

@@ -218,55 +218,6 @@ impl Hierarchy {
         Self { fine: fine.with_upper(), coarsest: current.rows(), coarsenings }
     }
 
-    /// The system's couplings outside the finest pattern, from `scales`, one per block of
-    /// the storage of ∂f/∂x over `pattern` (the system's), where ∂f/∂x's blocks there are
-    /// `s I` (the quadratic bending's constant Jacobian): their rows, and what [`lump`]
-    /// moves onto each diagonal from the system's blocks `−w s I` per unit stiffness
-    /// weight `w`. A lump is positively homogeneous in its block, so the system's is that
-    /// times its weight.
-    pub fn constant_couplings(&self, pattern: &BlockPattern, scales: &[f32], out: &mut ConstantCouplings) {
-        let ConstantCouplings { lumps, offsets, columns, scales: kept } = out;
-        // Row `i`'s couplings outside the finest pattern, columns ascending, as
-        // `(column, s)`.
-        let far = |i: usize| {
-            let (row, fine) = (pattern.symmetric_row(i), self.fine.row(i));
-            let slots = row.mirrors.iter().map(|&m| m as usize).chain(row.storage);
-            row.below
-                .iter()
-                .chain(row.above)
-                .zip(slots)
-                .filter(move |(column, _)| fine.binary_search(column).is_err())
-                .map(|(&column, slot)| (column, scales[slot]))
-        };
-        (0..pattern.rows())
-            .into_par_iter()
-            .with_min_len(PARALLEL_MIN_LEN)
-            .map(|i| {
-                far(i).fold(0.0, |moved, (_, s)| {
-                    let block = Mat3::from_diagonal(Vec3::splat(-s));
-                    moved + block.x_axis.x + lumping_shift(block, block)
-                })
-            })
-            .collect_into_vec(lumps);
-        // Sized exactly (grown by doubling, they were up to twice their length: 70 bytes
-        // a particle on the 256² hang scene).
-        let count: usize = (0..pattern.rows()).map(|i| far(i).count()).sum();
-        offsets.clear();
-        columns.clear();
-        kept.clear();
-        offsets.reserve_exact(pattern.rows() + 1);
-        columns.reserve_exact(count);
-        kept.reserve_exact(count);
-        offsets.push(0);
-        for i in 0..pattern.rows() {
-            for (column, s) in far(i) {
-                columns.push(column);
-                kept.push(s);
-            }
-            offsets.push(columns.len() as u32);
-        }
-    }
-
     /// Nodes per level, finest first.
     #[cfg(test)]
     fn sizes(&self) -> Vec<usize> {
@@ -806,80 +757,137 @@ fn lump(
     });
 }
 
-/// [`lump`] for a system whose blocks outside `fine` are its stiffness weight times
-/// constant ones, whose lumps per unit weight are known ([`Hierarchy::constant_couplings`]):
-/// the blocks `fine` has, copied, and each row's lump added to its diagonal, without
-/// visiting the blocks left out. The shifts and the walk over every block took [`lump`]
-/// 0.26 ms of a 4.4 ms hang_64 frame; this copy takes a fourth of the blocks.
+/// [`lump`] for a system that has no blocks outside `fine` but, beside them, constant
+/// couplings `far` whose lumps are known ([`ConstantCouplings`]): the system's blocks,
+/// copied, and each row's lump added to its diagonal. Walking the system's wider rows
+/// for the blocks to lump, and finding a shift for each, took [`lump`] 0.26 ms of a
+/// 4.4 ms hang_64 frame.
 fn lump_constant(
     pattern: &BlockPattern,
     system: &SymmetricBlockMatrix,
-    fine: &BlockPattern,
     far: WeightedCouplings<'_>,
     out: &mut SymmetricBlockMatrix,
 ) {
-    out.reset(fine);
-    fine.fill_upper_rows(&mut out.blocks, &|i, row, blocks| {
-        let (whole, mut at) = (pattern.symmetric_row(i), 0);
-        for (&column, block) in row.above.iter().zip(blocks.iter_mut()) {
-            // `fine`'s row is part of the system's.
-            while whole.above[at] != column {
-                at += 1;
-            }
-            *block = system.blocks[whole.storage.start + at];
-        }
+    out.blocks.clear();
+    out.blocks.extend_from_slice(&system.blocks);
+    let lumped = far.lumps();
+    pattern.fill_upper_rows(&mut out.blocks, &|i, _, blocks| {
         // The diagonal block is the first stored.
-        blocks[0] += Mat3::from_diagonal(Vec3::splat(far.weight * far.couplings.lumps[i]));
+        blocks[0] += Mat3::from_diagonal(Vec3::splat(lumped(i)));
     });
 }
 
-/// The system's couplings outside the finest pattern where they are its stiffness weight
-/// times constant blocks `−s I`: the quadratic bending's, which alone couple particles
-/// across an edge. Found once per topology ([`Hierarchy::constant_couplings`]), they
-/// spare [`lump`] its walk over the system's wider rows and its shifts, and the
-/// conjugate gradients' products the system's 19 blocks a row on a regular sheet: those
-/// take the finest level's 7, less their lumps, and these 12 as scalars
-/// ([`Multigrid::multiply_finest`], [`WeightedCouplings::row_product`]).
-#[derive(Debug, Clone, Default)]
+/// Couplings of a cloth's particles outside its block pattern that are a multiple of the
+/// identity and constant: the quadratic bending's across an edge, whose Jacobian there is
+/// `s I`. Kept as scalars, 8 bytes where a block of ∂f/∂x and of the system took 36 (a
+/// third of a regular sheet's blocks), and products over them take 3 operations where a
+/// block took 18; found once per topology. The system's pattern is then the multigrid's
+/// finest level's, and what [`lump`] would move onto the diagonal from them is known
+/// ahead (`lumps`).
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct ConstantCouplings {
-    /// Per particle, what [`lump`] moves onto its diagonal per unit weight, as a
-    /// multiple of `I`.
-    lumps: Vec<f32>,
     /// Particle `i`'s couplings are `columns` and `scales` from `offsets[i]` to
-    /// `offsets[i + 1]`, columns ascending.
+    /// `offsets[i + 1]`, columns ascending, and both directions of a pair with the same
+    /// scale.
     offsets: Vec<u32>,
     columns: Vec<u32>,
     scales: Vec<f32>,
+    /// Per particle, what [`lump`] moves onto its diagonal from the system's blocks
+    /// `−w s I` per unit stiffness weight `w`, as a multiple of `I` (a lump is positively
+    /// homogeneous in its block).
+    lumps: Vec<f32>,
 }
 
 impl ConstantCouplings {
-    /// Whether these are a system's of `rows` particles.
+    /// The couplings of `rows` particles from `entries` `(i, j, s)`, `i ≠ j`, each pair
+    /// in both directions: those of one pair summed in the order given.
+    pub fn new(rows: usize, mut entries: Vec<(u32, u32, f32)>) -> Self {
+        entries.sort_by_key(|&(i, j, _)| (i, j));
+        let mut couplings = Self { offsets: Vec::with_capacity(rows + 1), ..Self::default() };
+        let distinct = entries.windows(2).filter(|w| (w[0].0, w[0].1) != (w[1].0, w[1].1)).count() + 1;
+        couplings.columns.reserve_exact(distinct);
+        couplings.scales.reserve_exact(distinct);
+        couplings.offsets.push(0);
+        let mut next = entries.iter().peekable();
+        for i in 0..rows as u32 {
+            while let Some(&(_, j, s)) = next.next_if(|entry| entry.0 == i) {
+                match couplings.columns.last() {
+                    Some(&last) if last == j && couplings.columns.len() > couplings.offsets[i as usize] as usize => {
+                        *couplings.scales.last_mut().expect("a column has its scale") += s;
+                    }
+                    _ => {
+                        couplings.columns.push(j);
+                        couplings.scales.push(s);
+                    }
+                }
+            }
+            couplings.offsets.push(couplings.columns.len() as u32);
+        }
+        couplings.lumps = (0..rows)
+            .into_par_iter()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .map(|i| {
+                couplings.row(i).fold(0.0, |moved, (_, s)| {
+                    let block = Mat3::from_diagonal(Vec3::splat(-s));
+                    moved + block.x_axis.x + lumping_shift(block, block)
+                })
+            })
+            .collect();
+        couplings
+    }
+
+    /// Particle `i`'s couplings, `(j, s)`, columns ascending.
+    pub fn row(&self, i: usize) -> impl Iterator<Item = (u32, f32)> + '_ {
+        let range = self.offsets[i] as usize..self.offsets[i + 1] as usize;
+        self.columns[range.clone()].iter().copied().zip(self.scales[range].iter().copied())
+    }
+
+    /// Whether these are couplings of `rows` particles.
     pub fn has_rows(&self, rows: usize) -> bool {
         self.lumps.len() == rows
     }
+
+    /// These couplings at `weight`.
+    pub fn weighted(&self, weight: f32) -> WeightedCouplings<'_> {
+        WeightedCouplings { couplings: self, weight }
+    }
 }
 
-/// [`ConstantCouplings`] with the system's stiffness weight.
+/// [`ConstantCouplings`] in a matrix: the blocks `weight s I`, weight 1 in ∂f/∂x and
+/// `−w` in the system, `w` its stiffness weight `hβ + h²θ²`.
 #[derive(Debug, Clone, Copy)]
 pub struct WeightedCouplings<'a> {
-    /// The couplings per unit weight.
-    pub couplings: &'a ConstantCouplings,
-    /// `hβ + h²θ²`.
-    pub weight: f32,
+    couplings: &'a ConstantCouplings,
+    weight: f32,
 }
 
 impl WeightedCouplings<'_> {
-    /// Row `i` of the system times `x` less that of the finest level's lumped matrix:
-    /// `−w (l_i x_i + Σ_j s_ij x_j)`, `l_i` the row's lump.
+    /// Row `i` of these blocks times `x`: `weight Σ_j s_ij x_j`.
     #[inline]
     pub fn row_product(&self, i: usize, x: &[Vec3]) -> Vec3 {
-        let c = self.couplings;
-        let range = c.offsets[i] as usize..c.offsets[i + 1] as usize;
-        let far = c.columns[range.clone()]
-            .iter()
-            .zip(&c.scales[range])
-            .fold(Vec3::ZERO, |sum, (&j, &s)| sum + s * x[j as usize]);
-        -self.weight * (c.lumps[i] * x[i] + far)
+        self.weight * self.couplings.row(i).fold(Vec3::ZERO, |sum, (j, s)| sum + s * x[j as usize])
+    }
+
+    /// Row `i` of these blocks times `x` less their lump's: what a system's row adds to
+    /// that of its lumped matrix ([`lump_constant`]).
+    #[inline]
+    pub fn row_product_beyond_lump(&self, i: usize, x: &[Vec3]) -> Vec3 {
+        self.weight
+            * (self.couplings.lumps[i] * x[i]
+                + self.couplings.row(i).fold(Vec3::ZERO, |sum, (j, s)| sum + s * x[j as usize]))
+    }
+
+    /// Calls `visit(j, block)` for each of row `i`'s blocks, columns ascending.
+    pub fn for_row(&self, i: usize, mut visit: impl FnMut(u32, Mat3)) {
+        for (j, s) in self.couplings.row(i) {
+            visit(j, Mat3::from_diagonal(Vec3::splat(self.weight * s)));
+        }
+    }
+
+    /// Per row, what [`lump`] moves onto the diagonal from these blocks, given their weight
+    /// is the system's `−w`.
+    fn lumps(&self) -> impl Fn(usize) -> f32 + Sync + '_ {
+        move |i| -self.weight * self.couplings.lumps[i]
     }
 }
 
@@ -1254,8 +1262,8 @@ impl Multigrid {
     /// ([`lump`]): a third of the blocks (7 of 19 a row on a regular sheet, 4 of 10
     /// stored), for each of the cycle's smoothing products and for the Galerkin product,
     /// at a frame-sized step where the bending is some 10⁻⁴ of the membrane's stiffness.
-    /// Given `far`, those couplings are a known weight times constant blocks, and their
-    /// lumps come from it instead of the system's blocks ([`lump_constant`]).
+    /// Given `far`, the system's pattern is the finest level's, and those couplings are
+    /// constant and beside it, their lumps known ([`lump_constant`]).
     pub fn prepare(
         &mut self,
         hierarchy: &Hierarchy,
@@ -1266,7 +1274,7 @@ impl Multigrid {
         far: Option<WeightedCouplings<'_>>,
     ) {
         match far {
-            Some(far) => lump_constant(pattern, system, &hierarchy.fine, far, &mut self.fine),
+            Some(far) => lump_constant(pattern, system, far, &mut self.fine),
             None => lump(pattern, system, &hierarchy.fine, &mut self.shifts, &mut self.fine),
         }
         let pattern = &hierarchy.fine;
@@ -1350,7 +1358,8 @@ impl Multigrid {
     }
 
     /// `out = L x`, `L` the finest level's matrix as [`Multigrid::prepare`] left it:
-    /// with [`WeightedCouplings::row_product`] added row by row, the system's product.
+    /// with [`WeightedCouplings::row_product_beyond_lump`] added row by row, the
+    /// system's product.
     pub fn multiply_finest(&self, hierarchy: &Hierarchy, x: &[Vec3], out: &mut [Vec3]) {
         self.fine.multiply(&hierarchy.fine, x, out);
     }
@@ -1584,14 +1593,15 @@ mod tests {
         symmetric + Mat3::from_diagonal(Vec3::splat(lumping_shift(symmetric, b)))
     }
 
-    /// Blocks outside the finest pattern that are a weight times constant `−s I` (the
-    /// quadratic bending's) lump, from their lumps per unit weight, as the system's own
-    /// blocks do, and the lumped matrix's product with their rows is the system's: here a sheet's diagonal edges, of either sign, left out of its finest
-    /// level of horizontal and vertical edges.
+    /// Constant couplings `s I` beside a system over the finest pattern (the quadratic
+    /// bending's) lump, from their lumps per unit weight, as the same blocks in a system
+    /// over the wider pattern do, and the lumped matrix's product with their rows is that
+    /// system's: here a sheet's diagonal edges, of either sign, beside its horizontal and
+    /// vertical ones.
     #[test]
     fn constant_couplings_lump_as_their_blocks_do() {
         let (n, weight) = (9u32, 0.37);
-        let (pattern, mut system) = sheet(n, 1.0, 100.0);
+        let (pattern, mut whole) = sheet(n, 1.0, 100.0);
         let index = |i: u32, j: u32| i * n + j;
         let mut straight = Vec::new();
         for i in 0..n {
@@ -1600,41 +1610,50 @@ mod tests {
                 straight.extend((i + 1 < n).then_some([index(i, j), index(i + 1, j)]));
             }
         }
-        let fine = BlockPattern::from_stencils((n * n) as usize, straight.iter().map(|e| &e[..]));
-        let hierarchy = Hierarchy::build(&pattern, fine);
+        let fine = BlockPattern::from_stencils((n * n) as usize, straight.iter().map(|e| &e[..])).with_upper();
         // The diagonal edges' blocks become `−weight s I`, `s` irregular and of either
-        // sign; the scales of the blocks kept are anything.
-        let mut scales = vec![f32::NAN; system.blocks.len()];
+        // sign, kept apart as couplings beside the system over `fine`.
+        let mut entries = Vec::new();
         for i in 0..pattern.rows() {
             let row = pattern.symmetric_row(i);
             for (&column, slot) in row.above.iter().zip(row.storage) {
-                if column != i as u32 && hierarchy.fine.row(i).binary_search(&column).is_err() {
-                    scales[slot] = irregular(column + 31 * i as u32).x;
-                    system.blocks[slot] = Mat3::from_diagonal(Vec3::splat(-weight * scales[slot]));
+                if column != i as u32 && fine.row(i).binary_search(&column).is_err() {
+                    let s = irregular(column + 31 * i as u32).x;
+                    whole.blocks[slot] = Mat3::from_diagonal(Vec3::splat(-weight * s));
+                    entries.extend([(i as u32, column, s), (column, i as u32, s)]);
                 }
             }
         }
+        let mut system = SymmetricBlockMatrix::default();
+        system.reset(&fine);
+        for i in 0..fine.rows() {
+            let row = fine.symmetric_row(i);
+            for (&column, slot) in row.above.iter().zip(row.storage) {
+                system.blocks[slot] = whole.block(&pattern, i as u32, column);
+            }
+        }
+        let couplings = ConstantCouplings::new(fine.rows(), entries);
+        let far = couplings.weighted(-weight);
         let (mut shifts, mut expected, mut lumped) =
             (Vec::new(), SymmetricBlockMatrix::default(), SymmetricBlockMatrix::default());
-        lump(&pattern, &system, &hierarchy.fine, &mut shifts, &mut expected);
-        let mut couplings = ConstantCouplings::default();
-        hierarchy.constant_couplings(&pattern, &scales, &mut couplings);
-        let far = WeightedCouplings { couplings: &couplings, weight };
-        lump_constant(&pattern, &system, &hierarchy.fine, far, &mut lumped);
+        lump(&pattern, &whole, &fine, &mut shifts, &mut expected);
+        lump_constant(&fine, &system, far, &mut lumped);
         assert_eq!(lumped.blocks.len(), expected.blocks.len());
         let moved = couplings.lumps.iter().map(|l| l.abs()).fold(0.0, f32::max);
         assert!(moved > 0.1, "the diagonal edges move {moved} onto a diagonal");
         for (k, (a, b)) in lumped.blocks.iter().zip(&expected.blocks).enumerate() {
             assert!(frobenius(*a - *b) <= 1e-5 * frobenius(*b), "block {k}: {a} against {b}");
         }
-        // The lumped matrix's product, with the couplings' rows, is the system's.
         let x: Vec<Vec3> = (0..pattern.rows() as u32).map(irregular).collect();
-        let (mut exact, mut product) = (vec![Vec3::ZERO; x.len()], vec![Vec3::ZERO; x.len()]);
-        system.multiply(&pattern, &x, &mut exact);
-        lumped.multiply(&hierarchy.fine, &x, &mut product);
-        for (i, (exact, product)) in exact.iter().zip(&product).enumerate() {
-            let product = *product + far.row_product(i, &x);
-            assert!((product - *exact).length() <= 1e-4, "row {i}: {product} against {exact}");
+        let (mut exact, mut product, mut near) =
+            (vec![Vec3::ZERO; x.len()], vec![Vec3::ZERO; x.len()], vec![Vec3::ZERO; x.len()]);
+        whole.multiply(&pattern, &x, &mut exact);
+        lumped.multiply(&fine, &x, &mut product);
+        system.multiply(&fine, &x, &mut near);
+        for i in 0..x.len() {
+            let (lumped, near) = (product[i] + far.row_product_beyond_lump(i, &x), near[i] + far.row_product(i, &x));
+            assert!((lumped - exact[i]).length() <= 1e-4, "row {i}: {lumped} against {}", exact[i]);
+            assert!((near - exact[i]).length() <= 1e-4, "row {i}: {near} against {}", exact[i]);
         }
     }
 
