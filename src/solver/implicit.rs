@@ -272,7 +272,7 @@ impl<'a> StepSystem<'a> {
     }
 
     /// `out = A y`.
-    fn multiply(&self, y: &[Vec3], out: &mut [Vec3]) {
+    pub fn multiply(&self, y: &[Vec3], out: &mut [Vec3]) {
         self.matrix.multiply(self.pattern, y, out);
         if let Some(far) = self.far {
             add_rows(out, |i| far.row_product(i, y));
@@ -818,7 +818,7 @@ fn conjugate_gradient(
     if !*prepared {
         let preparing = Instant::now();
         match hierarchy {
-            Some(hierarchy) => multigrid.prepare(hierarchy, pattern, system.matrix, filter, x, system.far),
+            Some(hierarchy) => multigrid.prepare(hierarchy, system, filter, x),
             None => (0..filter.len())
                 .into_par_iter()
                 .with_min_len(PARALLEL_MIN_LEN)
@@ -835,7 +835,7 @@ fn conjugate_gradient(
     // z = M⁻¹ r, returning r·z.
     let precondition = |multigrid: &mut Multigrid, r: &[Vec3], z: &mut [Vec3], partials: &mut Vec<f64>| {
         if let Some(hierarchy) = hierarchy {
-            multigrid.apply(hierarchy, filter, r, z);
+            multigrid.apply(hierarchy, system, filter, r, z);
         }
         let jacobi = hierarchy.is_none().then_some(&*preconditioner);
         fused(z, r, partials, |i, z, r| {
@@ -863,19 +863,19 @@ fn conjugate_gradient(
         if rr <= target {
             return iteration;
         }
-        // q = S A d, and d·q: with constant couplings outside the multigrid's finest
-        // level, its matrix's product and theirs row by row.
-        let curvature = match (hierarchy, system.far) {
-            (Some(hierarchy), Some(far)) => {
-                multigrid.multiply_finest(hierarchy, direction, product);
+        // q = S A d, and d·q: the constant couplings' rows, if any, added in the pass that
+        // filters.
+        let curvature = match system.far {
+            Some(far) => {
+                system.matrix.multiply(pattern, direction, product);
                 contact_springs::add_product(springs, weights, Blocks::OffDiagonal, direction, product);
                 let direction = &*direction;
                 fused(product, direction, partials, |i, q, d| {
-                    *q = filter.apply(i, *q + far.row_product_beyond_lump(i, direction));
+                    *q = filter.apply(i, *q + far.row_product(i, direction));
                     f64::from(d.dot(*q))
                 })
             }
-            _ => {
+            None => {
                 multiply_system(system, springs, weights, direction, product);
                 fused(product, direction, partials, |i, q, d| {
                     *q = filter.apply(i, *q);
