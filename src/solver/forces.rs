@@ -8,10 +8,12 @@ use super::PARALLEL_MIN_LEN;
 use super::contact_springs::ContactSpring;
 use super::descent::Colouring;
 use super::elements::block::{by_parts, oriented, upper_map, upper_pair, upper_pairs};
-use super::elements::{BlockPattern, NO_HINGE, SpringElement, SymmetricBlockMatrix, VelocityJacobian};
+use super::elements::{
+    BlockPattern, ConstantCouplings, NO_HINGE, SpringElement, SymmetricBlockMatrix, VelocityJacobian,
+};
 use super::implicit::LinearDynamics;
 use super::integrate::Dynamics;
-use super::multigrid::{ConstantCouplings, Hierarchy};
+use super::multigrid::Hierarchy;
 use super::reduce;
 use crate::collision::body_contact::ContactBody;
 use crate::collision::motion_bounds::Surface;

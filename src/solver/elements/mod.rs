@@ -5,6 +5,7 @@
 
 pub mod bending;
 pub mod block;
+pub mod couplings;
 pub mod dual;
 pub mod hinge;
 pub mod membrane;
@@ -15,5 +16,6 @@ pub(crate) mod testing;
 
 pub use bending::{BendingFace, BendingLaw, BendingRigidity, BendingSurface, NO_HINGE};
 pub use block::{BlockMatrix, BlockPattern, ElementPositions, SymmetricBlockMatrix, VelocityJacobian};
+pub use couplings::{ConstantCouplings, WeightedCouplings};
 pub use membrane::{MembraneElement, MembraneMaterial};
 pub use spring::SpringElement;
