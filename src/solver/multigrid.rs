@@ -378,7 +378,7 @@ struct Level {
     prolongation: BlockMatrix,
     /// Estimate of the dominant mode of `D⁻¹ A`, kept for the next system.
     dominant: Vec<Vec3>,
-    /// The residual after smoothing, then the prolongated coarse correction.
+    /// The smoothing's products, then the residual after smoothing.
     scratch: Vec<Vec3>,
     /// The Chebyshev smoother's last update `d`.
     step: Vec<Vec3>,
@@ -1416,12 +1416,12 @@ fn cycle(
         &level.coarse_residual,
         &mut level.coarse_correction,
     );
-    level.prolongation.multiply(&coarsening.prolongation, &level.coarse_correction, &mut level.scratch);
-    z.par_iter_mut()
-        .zip(level.scratch.par_iter())
-        .with_min_len(PARALLEL_MIN_LEN)
-        .enumerate()
-        .for_each(|(i, (z, c))| *z += a.filtered(i, *c));
+    // z += S P c, each row of `P c` added as it is formed.
+    let (p, blocks, correction) = (&coarsening.prolongation, &level.prolongation.blocks, &level.coarse_correction);
+    z.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, z)| {
+        let row = p.slots(i).fold(Vec3::ZERO, |sum, k| sum + blocks[k] * correction[p.columns[k] as usize]);
+        *z += a.filtered(i, row);
+    });
     level.smooth(a, r, z, false);
 }
 
