@@ -123,13 +123,11 @@ impl ClothTopology {
         builds: u32,
     ) -> Self {
         let count = inv_mass.len();
+        let springs_stencils = || springs.pairs.iter().map(|p| &p[..]);
         // Every coupling, the bending faces' across an edge among them.
         let whole = BlockPattern::from_stencils(
             count,
-            springs
-                .pairs
-                .iter()
-                .map(|p| &p[..])
+            springs_stencils()
                 .chain(hinges.faces.iter().map(|f| &f.vertices[..]))
                 .chain(membranes.indices.iter().map(|t| &t[..])),
         );
@@ -137,11 +135,7 @@ impl ClothTopology {
         // level's.
         let near = BlockPattern::from_stencils(
             count,
-            springs
-                .pairs
-                .iter()
-                .map(|p| &p[..])
-                .chain(triangles.indices.iter().chain(&membranes.indices).map(|t| &t[..])),
+            springs_stencils().chain(triangles.indices.iter().chain(&membranes.indices).map(|t| &t[..])),
         );
         // Hinge forces and face blocks gathered from their angles, unless the bending is
         // quadratic, whose couplings across an edge are constant and kept apart.

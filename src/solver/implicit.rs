@@ -100,9 +100,9 @@ pub trait LinearDynamics: Dynamics + Sync {
     fn colouring(&self) -> &Colouring;
     /// The particles grouped level by level, for the multigrid preconditioner.
     fn hierarchy(&self) -> &Hierarchy;
-    /// The derivatives' couplings outside the hierarchy's finest pattern, if they are
-    /// constant ([`Hierarchy::constant_couplings`]); none to take the system's blocks as
-    /// they are.
+    /// The derivatives' constant couplings outside their pattern, if any
+    /// ([`ConstantCouplings`]: the quadratic bending's across an edge); none where the
+    /// pattern holds every coupling.
     fn constant_couplings(&self) -> Option<&ConstantCouplings> {
         None
     }
@@ -728,7 +728,7 @@ fn solve(
             });
             let motion = bound.as_mut().map(|bound| BoundedMotion { base, scale, anchor, bound });
             descend(
-                StepSystem::with_couplings(pattern, &ws.system, couplings, -ws.spring_weights.stiffness),
+                step_system(dynamics, &ws.system, -ws.spring_weights.stiffness),
                 dynamics.colouring(),
                 &ws.rhs,
                 &ws.filter,
@@ -779,9 +779,9 @@ fn fused(
 /// `tolerance` by preconditioned conjugate gradients (Baraff & Witkin's modified PCG), `A`
 /// the system matrix with the `springs`' off-diagonal blocks ([`multiply_system`]):
 /// `delta` starts as given and only moves within the filters. The preconditioner is a
-/// multigrid V-cycle over `hierarchy` if given (with its constant lumps, if any), else
-/// block Jacobi. Returns the iterations
-/// taken. Stops early on a direction of non-positive curvature, which a semi-definite
+/// multigrid V-cycle over `hierarchy` if given, else block Jacobi; the system's constant
+/// `couplings` outside its pattern, if any, enter both and every product. Returns the
+/// iterations taken. Stops early on a direction of non-positive curvature, which a semi-definite
 /// assembly should not give. The vector work runs in parallel over fixed chunks of
 /// particles, each pass computing the dot products it needs on the way, summed in chunk
 /// order.
@@ -865,23 +865,17 @@ fn conjugate_gradient(
         }
         // q = S A d, and d·q: the constant couplings' rows, if any, added in the pass that
         // filters.
+        multiply_system(StepSystem { far: None, ..system }, springs, weights, direction, product);
+        let along = &*direction;
         let curvature = match system.far {
-            Some(far) => {
-                system.matrix.multiply(pattern, direction, product);
-                contact_springs::add_product(springs, weights, Blocks::OffDiagonal, direction, product);
-                let direction = &*direction;
-                fused(product, direction, partials, |i, q, d| {
-                    *q = filter.apply(i, *q + far.row_product(i, direction));
-                    f64::from(d.dot(*q))
-                })
-            }
-            None => {
-                multiply_system(system, springs, weights, direction, product);
-                fused(product, direction, partials, |i, q, d| {
-                    *q = filter.apply(i, *q);
-                    f64::from(d.dot(*q))
-                })
-            }
+            Some(far) => fused(product, along, partials, |i, q, d| {
+                *q = filter.apply(i, *q + far.row_product(i, along));
+                f64::from(d.dot(*q))
+            }),
+            None => fused(product, along, partials, |i, q, d| {
+                *q = filter.apply(i, *q);
+                f64::from(d.dot(*q))
+            }),
         };
         if curvature <= 0.0 {
             return iteration;

@@ -394,9 +394,9 @@ struct Level {
 /// Jacobi step that stays within the filter. That is kept times the filter once more,
 /// `(S A_ii S + I − S)⁻¹ S S`, the same where the filter is a projection, so that the
 /// smoother's residual `S (r − A z)` can go unfiltered: filtered in a pass of its own,
-/// or in the smoother's loop, it took hang_64's solve 6 % longer. On a paired level `D` holds each pair's
-/// 6 × 6 block, so that an aggregate's translation and rotation, which the stiffness
-/// couples, are smoothed together.
+/// or in the smoother's loop, it took hang_64's solve 6 % longer. On a paired level `D`
+/// holds each pair's 6 × 6 block, so that an aggregate's translation and rotation, which
+/// the stiffness couples, are smoothed together.
 #[derive(Debug, Clone, Default)]
 struct Jacobi {
     /// Per node, the block of `D⁻¹` that takes its own residual.
@@ -785,17 +785,12 @@ impl Operator<'_> {
 
     /// `out = A x`.
     fn multiply(&self, x: &[Vec3], out: &mut [Vec3]) {
-        match self.matrix {
-            Matrix::Full(m) => m.multiply(self.pattern, x, out),
-            Matrix::Symmetric(m) => {
-                m.multiply(self.pattern, x, out);
-                if self.lumps.is_some() {
-                    out.par_iter_mut()
-                        .with_min_len(PARALLEL_MIN_LEN)
-                        .enumerate()
-                        .for_each(|(i, out)| *out += self.shift(i) * x[i]);
-                }
-            }
+        self.multiply_stored(x, out);
+        if self.lumps.is_some() {
+            out.par_iter_mut()
+                .with_min_len(PARALLEL_MIN_LEN)
+                .enumerate()
+                .for_each(|(i, out)| *out += self.shift(i) * x[i]);
         }
     }
 
@@ -1417,10 +1412,9 @@ fn cycle(
         &mut level.coarse_correction,
     );
     // z += S P c, each row of `P c` added as it is formed.
-    let (p, blocks, correction) = (&coarsening.prolongation, &level.prolongation.blocks, &level.coarse_correction);
+    let (p, prolongation, correction) = (&coarsening.prolongation, &level.prolongation, &level.coarse_correction);
     z.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, z)| {
-        let row = p.slots(i).fold(Vec3::ZERO, |sum, k| sum + blocks[k] * correction[p.columns[k] as usize]);
-        *z += a.filtered(i, row);
+        *z += a.filtered(i, prolongation.row_product(p, i, correction));
     });
     level.smooth(a, r, z, false);
 }

@@ -394,13 +394,20 @@ impl BlockMatrix {
 
     /// `out = self · x`.
     pub fn multiply(&self, pattern: &BlockPattern, x: &[Vec3], out: &mut [Vec3]) {
-        out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, out)| {
-            let mut sum = Vec3::ZERO;
-            for k in pattern.slots(i) {
-                sum += self.blocks[k] * x[pattern.columns[k] as usize];
-            }
-            *out = sum;
-        });
+        out.par_iter_mut()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .enumerate()
+            .for_each(|(i, out)| *out = self.row_product(pattern, i, x));
+    }
+
+    /// Row `i` of the matrix times `x`, blocks in column order.
+    #[inline]
+    pub fn row_product(&self, pattern: &BlockPattern, i: usize, x: &[Vec3]) -> Vec3 {
+        let mut sum = Vec3::ZERO;
+        for k in pattern.slots(i) {
+            sum += self.blocks[k] * x[pattern.columns[k] as usize];
+        }
+        sum
     }
 
     /// The block `(row, column)`, zero where the pattern has none.
