@@ -43,11 +43,11 @@
 //! filter. Every kernel is a parallel loop over rows or blocks with a
 //! fixed order inside, so the result does not depend on the number of threads.
 
-use glam::{Mat3, Vec3, Vec4};
+use glam::{Mat3, Vec3, Vec3A, Vec4};
 use rayon::prelude::*;
 
 use super::PARALLEL_MIN_LEN;
-use super::elements::block::by_parts;
+use super::elements::block::{block_product, by_parts, times, transposed_times};
 use super::elements::spring::{outer, skew};
 use super::elements::{BlockMatrix, BlockPattern, SymmetricBlockMatrix, WeightedCouplings};
 use super::filter::{Filters, filtered_inverse};
@@ -284,9 +284,7 @@ impl Restriction {
 
     /// `out = Pᵀ t`, for `P`'s `blocks` over `p`, with `buffer` for the chunks' sums.
     fn apply(&self, p: &BlockPattern, blocks: &[Mat3], t: &[Vec3], buffer: &mut Vec<Vec3>, out: &mut [Vec3]) {
-        // `Bᵀ v` without forming the transpose.
-        let transposed =
-            |block: &Mat3, v: Vec3| Vec3::new(block.x_axis.dot(v), block.y_axis.dot(v), block.z_axis.dot(v));
+        let transposed = |block: &Mat3, v: Vec3| Vec3::from(transposed_times(block, Vec3A::from(v)));
         match self {
             Self::ByColumns { slots, rows } => {
                 out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(c, out)| {
@@ -440,8 +438,8 @@ impl Jacobi {
     /// `(D⁻¹ v)_i`, `v` given entry by entry.
     #[inline]
     fn apply(&self, i: usize, v: impl Fn(usize) -> Vec3) -> Vec3 {
-        let own = self.own[i] * v(i);
-        self.partner.get(i).map_or(own, |partner| own + *partner * v(i ^ 1))
+        let own = times(&self.own[i], Vec3A::from(v(i)));
+        Vec3::from(self.partner.get(i).map_or(own, |partner| own + times(partner, Vec3A::from(v(i ^ 1)))))
     }
 }
 
@@ -810,9 +808,9 @@ impl Operator<'_> {
         match self.matrix {
             Matrix::Full(_) => {
                 out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, out)| {
-                    let mut sum = r[i];
-                    self.for_row(i, |j, block| sum -= block * z[j as usize]);
-                    *out = self.filtered(i, sum);
+                    let mut sum = Vec3A::from(r[i]);
+                    self.for_row(i, |j, block| sum -= times(&block, Vec3A::from(z[j as usize])));
+                    *out = self.filtered(i, Vec3::from(sum));
                 });
             }
             Matrix::Symmetric(matrix) => {
@@ -1100,7 +1098,7 @@ impl Level {
                 let translation = 2 * rigid.aggregate(node);
                 let Ok(at) = columns.binary_search(&translation) else { return };
                 for (out, block) in pushed[at..at + 2].iter_mut().zip(tentative(node)) {
-                    *out += a_ik * block;
+                    *out += block_product(&a_ik, &block);
                 }
             });
         };
@@ -1112,9 +1110,9 @@ impl Level {
                 let pushed = [blocks[s], blocks.get(columns.len() + s).copied().unwrap_or(Mat3::ZERO)];
                 for r in 0..size {
                     let i = first + r;
-                    let mut smoothed = inverse.own[i] * pushed[r];
+                    let mut smoothed = block_product(&inverse.own[i], &pushed[r]);
                     if let Some(partner) = inverse.partner.get(i) {
-                        smoothed += *partner * pushed[1 - r];
+                        smoothed += block_product(partner, &pushed[1 - r]);
                     }
                     let own = match coarse / 2 == rigid.aggregate(i) {
                         true => tentative(i)[coarse as usize % 2],
@@ -1147,7 +1145,7 @@ impl Level {
                 a.for_row(i, |node, block| {
                     let mut at = 0;
                     for s in p.slots(node as usize) {
-                        add_at(columns, blocks, &mut at, p.columns[s], block * prolongation[s]);
+                        add_at(columns, blocks, &mut at, p.columns[s], block_product(&block, &prolongation[s]));
                     }
                 });
             });
@@ -1172,7 +1170,7 @@ impl Level {
                             &mut coarse_blocks[row_slots.start - coarse_first..row_slots.end - coarse_first];
                         let mut at = 0;
                         for (&column, product) in product_columns.iter().zip(products) {
-                            add_at(columns, row_blocks, &mut at, column, transposed * *product);
+                            add_at(columns, row_blocks, &mut at, column, block_product(&transposed, product));
                         }
                     }
                 }

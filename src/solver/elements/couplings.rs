@@ -1,7 +1,7 @@
 //! Couplings beside a block matrix: constant multiples of the identity between particles
 //! its pattern leaves out, kept as scalars (the quadratic bending's across an edge).
 
-use glam::{Mat3, Vec3};
+use glam::{Mat3, Vec3, Vec3A};
 use rayon::prelude::*;
 
 use crate::solver::PARALLEL_MIN_LEN;
@@ -90,7 +90,8 @@ impl WeightedCouplings<'_> {
     /// Row `i` of these blocks times `x`: `weight Σ_j s_ij x_j`.
     #[inline]
     pub fn row_product(&self, i: usize, x: &[Vec3]) -> Vec3 {
-        self.weight * self.couplings.row(i).fold(Vec3::ZERO, |sum, (j, s)| sum + s * x[j as usize])
+        let sum = self.couplings.row(i).fold(Vec3A::ZERO, |sum, (j, s)| sum + s * Vec3A::from(x[j as usize]));
+        self.weight * Vec3::from(sum)
     }
 
     /// Calls `visit(j, block)` for each of row `i`'s blocks, columns ascending.
