@@ -20,12 +20,13 @@
 
 use std::time::Instant;
 
-use glam::{Mat3, Vec3};
+use glam::{Mat3, Vec3, Vec3A};
 use rayon::prelude::*;
 
 use super::PARALLEL_MIN_LEN;
 use super::contact_springs::{self, Blocks, ContactSpring, Weights};
 use super::descent::{BoundedMotion, Colouring, DescentSettings, DescentWorkspace, descend};
+use super::elements::block::times;
 use super::elements::spring::outer;
 use super::elements::{BlockPattern, ConstantCouplings, SymmetricBlockMatrix, VelocityJacobian, WeightedCouplings};
 use super::filter::Filters;
@@ -840,7 +841,7 @@ fn conjugate_gradient(
         let jacobi = hierarchy.is_none().then_some(&*preconditioner);
         fused(z, r, partials, |i, z, r| {
             if let Some(jacobi) = jacobi {
-                *z = filter.apply(i, jacobi[i] * r);
+                *z = filter.apply(i, Vec3::from(times(&jacobi[i], Vec3A::from(r))));
             }
             f64::from(r.dot(*z))
         })
