@@ -140,11 +140,11 @@ impl ClothTopology {
         // Hinge forces and face blocks gathered from their angles, unless the bending is
         // quadratic, whose couplings across an edge are constant and kept apart.
         let by_angles = !hinges.is_quadratic();
-        let (colouring, hierarchy) = (Colouring::greedy(&whole), Hierarchy::build(&whole, near.clone()));
         let pattern = match by_angles {
-            true => whole.with_upper(),
-            false => near.with_upper(),
+            true => whole.clone().with_upper(),
+            false => near.clone().with_upper(),
         };
+        let (colouring, hierarchy) = (Colouring::greedy(&whole), Hierarchy::build(&whole, &near, &pattern));
         let mut free_inv_mass = inv_mass.to_vec();
         for &p in pinned {
             free_inv_mass[p as usize] = 0.0;

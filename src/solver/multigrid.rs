@@ -124,10 +124,12 @@ const REBUILD_RUN: u32 = 32;
 /// patterns of the prolongators and coarse matrices. Depends only on the block patterns.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Hierarchy {
-    /// The finest level's pattern: the couplings of the particles that share a triangle or
-    /// a spring, which the system's pattern holds with the bending's, across an edge, as
-    /// well (see [`Multigrid::prepare`]); laid out for a [`SymmetricBlockMatrix`].
-    fine: BlockPattern,
+    /// The finest level's pattern, the couplings of the particles that share a triangle or
+    /// a spring, where the system's pattern holds the bending's, across an edge, as well
+    /// (see [`Multigrid::prepare`]); laid out for a [`SymmetricBlockMatrix`]. `None` where
+    /// the system's pattern is the finest level's (its bending's couplings kept beside
+    /// it), which would otherwise be held twice: 48 bytes a particle.
+    fine: Option<BlockPattern>,
     /// From the finest level down, each coarsening of the level above.
     coarsenings: Vec<Coarsening>,
     /// Nodes of the coarsest level.
@@ -159,10 +161,11 @@ struct Coarsening {
 impl Hierarchy {
     /// The levels below `fine`, the finest level's pattern, until [`COARSEST_NODES`]
     /// remain or the grouping stalls: the particles grouped by their neighbourhoods in
-    /// `neighbours` (the system's pattern), then the pairs of nodes of each aggregate by
+    /// `neighbours` (every coupling of the system, those kept beside it too), then the pairs of nodes of each aggregate by
     /// the neighbourhoods of either. The system's wider rows make larger aggregates than
     /// `fine`'s would: grouped by `fine`, hang_64 took 31 iterations a frame against 8.
-    pub fn build(neighbours: &BlockPattern, fine: BlockPattern) -> Self {
+    /// `system` is the pattern of the systems the levels will be prepared for.
+    pub fn build(neighbours: &BlockPattern, fine: &BlockPattern, system: &BlockPattern) -> Self {
         let mut coarsenings: Vec<Coarsening> = Vec::new();
         let mut current = fine.clone();
         while current.rows() > COARSEST_NODES {
@@ -207,7 +210,8 @@ impl Hierarchy {
             let restriction = Restriction::new(&prolongation, count, by_columns, rows_of);
             coarsenings.push(Coarsening { paired, aggregate, members, prolongation, restriction, product, coarse });
         }
-        Self { fine: fine.with_upper(), coarsest: current.rows(), coarsenings }
+        let same = fine.offsets == system.offsets && fine.columns == system.columns;
+        Self { fine: (!same).then(|| fine.clone().with_upper()), coarsest: current.rows(), coarsenings }
     }
 
     /// Nodes per level, finest first.
@@ -712,16 +716,16 @@ fn finest_operator<'a>(
     system: StepSystem<'a>,
     filter: &'a Filters,
 ) -> Operator<'a> {
-    match system.far {
-        Some(far) => Operator {
+    match (system.far, &hierarchy.fine) {
+        (None, Some(pattern)) => {
+            Operator { pattern, matrix: Matrix::Symmetric(fine), lumps: None, filter: Some(filter) }
+        }
+        (far, _) => Operator {
             pattern: system.pattern,
             matrix: Matrix::Symmetric(system.matrix),
-            lumps: Some(far),
+            lumps: far,
             filter: Some(filter),
         },
-        None => {
-            Operator { pattern: &hierarchy.fine, matrix: Matrix::Symmetric(fine), lumps: None, filter: Some(filter) }
-        }
     }
 }
 
@@ -1279,18 +1283,17 @@ impl Multigrid {
     /// finest level's, and the finest level is the system itself with their lumps, known
     /// ahead, on its diagonal: no copy (144 bytes a particle).
     pub fn prepare(&mut self, hierarchy: &Hierarchy, system: StepSystem<'_>, filter: &Filters, positions: &[Vec3]) {
-        match system.far {
-            Some(_) => self.fine = SymmetricBlockMatrix::default(),
-            None => lump(system.pattern, system.matrix, &hierarchy.fine, &mut self.shifts, &mut self.fine),
+        match (system.far, &hierarchy.fine) {
+            (None, Some(fine)) => lump(system.pattern, system.matrix, fine, &mut self.shifts, &mut self.fine),
+            _ => self.fine = SymmetricBlockMatrix::default(),
         }
-        let pattern = &hierarchy.fine;
         let built_for = |levels: &[Level]| {
             levels.len() == hierarchy.coarsenings.len()
                 && levels
                     .iter()
                     .zip(&hierarchy.coarsenings)
                     .all(|(level, coarsening)| level.prolongation.blocks.len() == coarsening.prolongation.columns.len())
-                && levels.first().is_none_or(|level| level.inverse.own.len() == pattern.rows())
+                && levels.first().is_none_or(|level| level.inverse.own.len() == system.pattern.rows())
         };
         let current = !self.rebuild && built_for(&self.levels);
         match self.levels.first_mut() {
@@ -1546,7 +1549,7 @@ mod tests {
     fn the_coarse_levels_move_the_sheet_rigidly() {
         let n = 32;
         let (pattern, _) = sheet(n, 1.0, 1.0);
-        let hierarchy = Hierarchy::build(&pattern, pattern.clone());
+        let hierarchy = Hierarchy::build(&pattern, &pattern, &pattern);
         // A sheet bent about one axis, so that no aggregate's points lie on a line.
         let positions: Vec<Vec3> = (0..n * n)
             .map(|p| {
@@ -1635,7 +1638,7 @@ mod tests {
         }
         let couplings = ConstantCouplings::new(fine.rows(), entries);
         let split = StepSystem { pattern: &fine, matrix: &system, far: Some(couplings.weighted(-weight)) };
-        let hierarchy = Hierarchy::build(&pattern, fine.clone());
+        let hierarchy = Hierarchy::build(&pattern, &fine, &fine);
         let (mut shifts, mut expected, filter) =
             (Vec::new(), SymmetricBlockMatrix::default(), Filters::free(fine.rows()));
         lump(&pattern, &whole, &fine, &mut shifts, &mut expected);
@@ -1677,7 +1680,7 @@ mod tests {
     #[test]
     fn the_restriction_by_rows_sums_as_the_one_by_columns() {
         let (pattern, _) = sheet(40, 1.0, 100.0);
-        let hierarchy = Hierarchy::build(&pattern, pattern.clone());
+        let hierarchy = Hierarchy::build(&pattern, &pattern, &pattern);
         let coarsening = &hierarchy.coarsenings[0];
         let (p, count) = (&coarsening.prolongation, coarsening.coarse.rows());
         assert!(matches!(coarsening.restriction, Restriction::ByColumns { .. }), "a small level gathers");
@@ -1733,7 +1736,7 @@ mod tests {
     #[test]
     fn a_sheet_coarsens_level_by_level_to_a_few_dozen_nodes() {
         let (pattern, _) = sheet(64, 1.0, 1.0);
-        let sizes = Hierarchy::build(&pattern, pattern.clone()).sizes();
+        let sizes = Hierarchy::build(&pattern, &pattern, &pattern).sizes();
         assert!(sizes.len() >= 3, "levels {sizes:?}");
         assert!(sizes.windows(2).all(|w| 4 * w[1] <= w[0]), "each level at least 4× coarser: {sizes:?}");
         assert!(sizes.last().is_some_and(|&n| n <= COARSEST_NODES), "coarsest {sizes:?}");
@@ -1743,7 +1746,7 @@ mod tests {
     fn the_v_cycle_is_symmetric_positive_within_the_filter_and_converges_alone() {
         // h²k/m = 10⁴, as cloth at frame-sized steps; two levels below the particles.
         let (pattern, system) = sheet(48, 1.0, 1.0e4);
-        let hierarchy = Hierarchy::build(&pattern, pattern.clone());
+        let hierarchy = Hierarchy::build(&pattern, &pattern, &pattern);
         assert!(hierarchy.sizes().len() >= 3, "levels {:?}", hierarchy.sizes());
         let n = pattern.rows();
         let mut filter = Filters::free(n);
@@ -1796,7 +1799,7 @@ mod tests {
         let turned = Mat3::from_euler(glam::EulerRot::XYZ, 0.4, 0.3, 0.2);
         let (normal, position) = (turned * Vec3::Z, |p| turned * grid_position(48, p));
         let (pattern, system) = sheet_at(48, 1.0, 1.0e4, position);
-        let hierarchy = Hierarchy::build(&pattern, pattern.clone());
+        let hierarchy = Hierarchy::build(&pattern, &pattern, &pattern);
         let n = pattern.rows();
         let mut filter = Filters::free(n);
         for i in 0..n {
