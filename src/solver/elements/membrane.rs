@@ -4,7 +4,7 @@
 //! Green strain `E = ½(FᵀF − I)`, axis 1 along the warp. The constants are stress resultants
 //! per unit strain [N/m] (modulus times thickness).
 
-use glam::{Mat2, Mat3, Vec2, Vec3};
+use glam::{Mat2, Mat3, Mat3A, Vec2, Vec3};
 
 use super::block::upper_map;
 use super::spring::outer;
@@ -136,7 +136,10 @@ impl MembraneElement {
         let (g11, g22, g12) = if definite { positive_part(s11, s22, s12) } else { (s11, s22, s12) };
         let MembraneMaterial { d1, d2, d3, d4 } = *material;
         // F C Fᵀ = c₀₀ w wᵀ + c₀₁ w fᵀ + c₁₀ f wᵀ + c₁₁ f fᵀ, w and f the warp's and weft's images.
+        // In SIMD lanes (`Mat3A`): the same sums in the same order, so the same bits, and
+        // the products of the sum below each three lanes wide.
         let (ww, wf, ff) = (outer(f.warp, f.warp), outer(f.warp, f.weft), outer(f.weft, f.weft));
+        let (ww, wf, ff) = (Mat3A::from(ww), Mat3A::from(wf), Mat3A::from(ff));
         let fw = wf.transpose();
         let gamma = self.shape_gradients();
         upper_map::<3, 6, _>(|a, b| {
@@ -149,7 +152,7 @@ impl MembraneElement {
                 d4 * p.x * q.x + d2 * p.y * q.y,
             ];
             let material_term = c[0] * ww + c[1] * wf + c[2] * fw + c[3] * ff;
-            -self.rest_area * (Mat3::from_diagonal(Vec3::splat(geometric)) + material_term)
+            Mat3::from(-self.rest_area * (Mat3A::from_diagonal(Vec3::splat(geometric)) + material_term))
         })
     }
 }
