@@ -161,8 +161,8 @@ struct Coarsening {
 impl Hierarchy {
     /// The levels below `fine`, the finest level's pattern, until [`COARSEST_NODES`]
     /// remain or the grouping stalls: the particles grouped by their neighbourhoods in
-    /// `neighbours` (every coupling of the system, those kept beside it too), then the pairs of nodes of each aggregate by
-    /// the neighbourhoods of either. The system's wider rows make larger aggregates than
+    /// `neighbours` (every coupling of the system, those kept beside it too), then the
+    /// pairs of nodes of each aggregate by the neighbourhoods of either. The system's wider rows make larger aggregates than
     /// `fine`'s would: grouped by `fine`, hang_64 took 31 iterations a frame against 8.
     /// `system` is the pattern of the systems the levels will be prepared for.
     pub fn build(neighbours: &BlockPattern, fine: &BlockPattern, system: &BlockPattern) -> Self {
@@ -707,9 +707,10 @@ enum Matrix<'a> {
     Symmetric(&'a SymmetricBlockMatrix),
 }
 
-/// The finest level's operator, within the constraint filter: the `system` with the
-/// lumps of its constant couplings on its diagonal, if it has them, else `fine`, the
-/// system lumped over the hierarchy's finest pattern.
+/// The finest level's operator, within the constraint filter: `fine`, the system lumped
+/// over the hierarchy's finest pattern, where that pattern is narrower than the system's
+/// and no constant couplings stand beside it; else the `system` itself, with the lumps of
+/// its constant couplings, if it has them, on its diagonal.
 fn finest_operator<'a>(
     hierarchy: &'a Hierarchy,
     fine: &'a SymmetricBlockMatrix,
