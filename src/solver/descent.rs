@@ -464,6 +464,38 @@ mod tests {
         (pattern, system)
     }
 
+    /// Where the particles at `x0`, joined by [`edge_springs`] along `edges`, are after
+    /// `sweeps` sweeps from rest of the step of `h` [s] whose solution is `solution` (Δv),
+    /// each sweep within `bound` if given.
+    fn swept(
+        x0: &[Vec3],
+        edges: &[[u32; 2]],
+        h: f32,
+        solution: &[Vec3],
+        sweeps: u32,
+        bound: Option<&mut dyn FnMut(&[Vec3], f32, &mut [Bound])>,
+    ) -> Vec<Vec3> {
+        let n = x0.len();
+        let (pattern, system) = edge_springs(n, edges, h);
+        let mut rhs = vec![Vec3::ZERO; n];
+        system.multiply(&pattern, solution, &mut rhs);
+        let settings = DescentSettings { sweeps, ..DescentSettings::default() };
+        let (mut delta, mut ws, mut anchor) = (vec![Vec3::ZERO; n], DescentWorkspace::default(), x0.to_vec());
+        let motion = bound.map(|bound| BoundedMotion { base: x0, scale: h, anchor: &mut anchor, bound });
+        descend(
+            StepSystem::new(&pattern, &system),
+            &Colouring::greedy(&pattern),
+            &rhs,
+            &Filters::free(n),
+            &settings,
+            0.0,
+            motion,
+            &mut delta,
+            &mut ws,
+        );
+        x0.iter().zip(&delta).map(|(x, d)| *x + h * *d).collect()
+    }
+
     #[test]
     fn a_grid_pattern_gets_a_proper_colouring() {
         // A 5 × 5 grid with both diagonals in every cell: the 8-neighbourhood needs 4.
@@ -578,31 +610,13 @@ mod tests {
         let (n, h, thickness) = (x0.len(), 1.0f32 / 60.0, THICKNESS);
         let (radius, centre) = (0.1f32, Vec3::new(0.025, -0.104, 0.025));
         let sphere = body(SharedShape::ball(radius), centre);
-        let (pattern, system) = edge_springs(n, &ContactMesh::edges_of(&triangles), h);
-        let solution = vec![-0.012 / h * Vec3::Y; n];
-        let mut rhs = vec![Vec3::ZERO; n];
-        system.multiply(&pattern, &solution, &mut rhs);
-        let (colouring, filter) = (Colouring::greedy(&pattern), Filters::free(n));
-        let after = |sweeps: u32, bounded: bool| -> Vec<Vec3> {
-            let settings = DescentSettings { sweeps, ..DescentSettings::default() };
-            let (mut delta, mut ws, mut anchor) = (vec![Vec3::ZERO; n], DescentWorkspace::default(), x0.clone());
+        let (edges, solution) = (ContactMesh::edges_of(&triangles), vec![-0.012 / h * Vec3::Y; n]);
+        let after = |sweeps: u32, bounded: bool| {
             let mut bound = |x: &[Vec3], _: f32, out: &mut [Bound]| {
                 out.fill(Bound::FREE);
                 body_bounds::limit(std::slice::from_ref(&sphere), x, out);
             };
-            let motion = bounded.then(|| BoundedMotion { base: &x0, scale: h, anchor: &mut anchor, bound: &mut bound });
-            descend(
-                StepSystem::new(&pattern, &system),
-                &colouring,
-                &rhs,
-                &filter,
-                &settings,
-                0.0,
-                motion,
-                &mut delta,
-                &mut ws,
-            );
-            x0.iter().zip(&delta).map(|(x, d)| *x + h * *d).collect()
+            swept(&x0, &edges, h, &solution, sweeps, bounded.then_some(&mut bound))
         };
         let clearance = |x: &[Vec3]| x.iter().map(|p| p.distance(centre) - radius).fold(f32::INFINITY, f32::min);
         for sweeps in 1..=30 {
@@ -626,32 +640,14 @@ mod tests {
         let (x0, triangles) = two_layers(&mut Lcg(7));
         let edges = ContactMesh::edges_of(&triangles);
         let (n, h) = (x0.len(), 1.0f32 / 60.0);
-        let (pattern, system) = edge_springs(n, &edges, h);
         let solution: Vec<Vec3> = (0..n).map(|i| if i >= 36 { -0.012 / h * Vec3::Y } else { Vec3::ZERO }).collect();
-        let mut rhs = vec![Vec3::ZERO; n];
-        system.multiply(&pattern, &solution, &mut rhs);
-        let (colouring, filter) = (Colouring::greedy(&pattern), Filters::free(n));
         let surface = Surface { triangles: &triangles, edges: &edges };
         // Where the particles are after `sweeps` sweeps, with or without the bounds: the
         // sweeps of a longer run begin as a shorter run's did.
-        let after = |sweeps: u32, bounded: bool| -> Vec<Vec3> {
-            let settings = DescentSettings { sweeps, ..DescentSettings::default() };
-            let (mut delta, mut ws) = (vec![Vec3::ZERO; n], DescentWorkspace::default());
-            let (mut search, mut anchor) = (MotionBounds::default(), x0.clone());
+        let after = |sweeps: u32, bounded: bool| {
+            let mut search = MotionBounds::default();
             let mut bound = |x: &[Vec3], wanted: f32, out: &mut [Bound]| search.compute(surface, x, wanted, out);
-            let motion = bounded.then(|| BoundedMotion { base: &x0, scale: h, anchor: &mut anchor, bound: &mut bound });
-            descend(
-                StepSystem::new(&pattern, &system),
-                &colouring,
-                &rhs,
-                &filter,
-                &settings,
-                0.0,
-                motion,
-                &mut delta,
-                &mut ws,
-            );
-            x0.iter().zip(&delta).map(|(x, d)| *x + h * *d).collect()
+            swept(&x0, &edges, h, &solution, sweeps, bounded.then_some(&mut bound))
         };
         let path = |bounded: bool| -> Vec<Vec<Vec3>> {
             std::iter::once(x0.clone()).chain((1..=30).map(|sweeps| after(sweeps, bounded))).collect()
