@@ -782,8 +782,8 @@ fn fused(
 /// `delta` starts as given and only moves within the filters. The preconditioner is a
 /// multigrid V-cycle over `hierarchy` if given, else block Jacobi; the system's constant
 /// `couplings` outside its pattern, if any, enter both and every product. Returns the
-/// iterations taken. Stops early on a direction of non-positive curvature, which a semi-definite
-/// assembly should not give. The vector work runs in parallel over fixed chunks of
+/// iterations taken. Stops early on a direction of non-positive curvature, which a
+/// semi-definite assembly should not give. The vector work runs in parallel over fixed chunks of
 /// particles, each pass computing the dot products it needs on the way, summed in chunk
 /// order.
 fn conjugate_gradient(

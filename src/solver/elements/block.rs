@@ -530,9 +530,9 @@ impl SymmetricBlockMatrix {
     /// Row `i` of the matrix times `x`: every block of the row in column order.
     #[inline]
     pub fn row_product(&self, pattern: &BlockPattern, i: usize, x: &[Vec3]) -> Vec3 {
-        let mut sum = Vec3::ZERO;
-        self.for_row(pattern, i, |j, block, _| sum += block * x[j as usize]);
-        sum
+        let mut sum = Vec3A::ZERO;
+        self.for_row(pattern, i, |j, block, _| sum += times(&block, Vec3A::from(x[j as usize])));
+        Vec3::from(sum)
     }
 
     /// Calls `visit(column, block, slot)` for every block of row `i`, columns ascending,
