@@ -23,7 +23,6 @@ use std::time::Instant;
 use glam::{Mat3, Vec3, Vec3A};
 use rayon::prelude::*;
 
-use super::PARALLEL_MIN_LEN;
 use super::contact_springs::{self, Blocks, ContactSpring, Weights};
 use super::descent::{BoundedMotion, Colouring, DescentSettings, DescentWorkspace, descend};
 use super::elements::block::times;
@@ -32,6 +31,7 @@ use super::elements::{BlockPattern, ConstantCouplings, SymmetricBlockMatrix, Vel
 use super::filter::Filters;
 use super::integrate::{Dynamics, StageTimes, StepReport};
 use super::multigrid::{Hierarchy, Multigrid};
+use super::{PARALLEL_MIN_LEN, add_rows};
 use crate::collision::body_bounds;
 use crate::collision::body_contact::ContactBody;
 use crate::collision::motion_bounds::{Bound, MotionBounds, Surface};
@@ -279,11 +279,6 @@ impl<'a> StepSystem<'a> {
             add_rows(out, |i| far.row_product(i, y));
         }
     }
-}
-
-/// Adds `row(i)` to each `out[i]`, in parallel.
-fn add_rows(out: &mut [Vec3], row: impl Fn(usize) -> Vec3 + Sync) {
-    out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, out)| *out += row(i));
 }
 
 /// The system of `matrix` over `dynamics`' pattern at stiffness weight `stiffness`, with
@@ -868,16 +863,10 @@ fn conjugate_gradient(
         // filters.
         multiply_system(StepSystem { far: None, ..system }, springs, weights, direction, product);
         let along = &*direction;
-        let curvature = match system.far {
-            Some(far) => fused(product, along, partials, |i, q, d| {
-                *q = filter.apply(i, *q + far.row_product(i, along));
-                f64::from(d.dot(*q))
-            }),
-            None => fused(product, along, partials, |i, q, d| {
-                *q = filter.apply(i, *q);
-                f64::from(d.dot(*q))
-            }),
-        };
+        let curvature = fused(product, along, partials, |i, q, d| {
+            *q = filter.apply(i, system.far.map_or(*q, |far| *q + far.row_product(i, along)));
+            f64::from(d.dot(*q))
+        });
         if curvature <= 0.0 {
             return iteration;
         }

@@ -20,6 +20,9 @@ pub mod probes;
 pub mod reduce;
 pub mod strain_limit;
 
+use glam::Vec3;
+use rayon::prelude::*;
+
 /// Below this many items a parallel loop runs on one thread: splitting costs more than it
 /// saves on small cloths. 512 before: the multigrid's coarse levels of a few hundred nodes
 /// ran on one thread, and hang_64 took 10.3 ms a frame against 9.6 to 9.9 at 128 (its
@@ -28,3 +31,9 @@ pub mod strain_limit;
 /// 2 048 were slower (hang_64 11.8 to 12.2 and 12.5 to 12.6 against 11.6 to 11.8 at 512).
 /// The frames do not depend on it.
 pub(crate) const PARALLEL_MIN_LEN: usize = 128;
+
+/// Adds `row(i)` to each `out[i]`, in parallel: a matrix's part whose rows are formed one
+/// by one (constant couplings, lumps, a prolongated correction) added to a product.
+pub(crate) fn add_rows(out: &mut [Vec3], row: impl Fn(usize) -> Vec3 + Sync) {
+    out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, out)| *out += row(i));
+}

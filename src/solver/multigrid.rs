@@ -46,13 +46,13 @@
 use glam::{Mat3, Vec3, Vec3A, Vec4};
 use rayon::prelude::*;
 
-use super::PARALLEL_MIN_LEN;
 use super::elements::block::{block_product, by_parts, times, transposed_times};
 use super::elements::spring::{outer, skew};
 use super::elements::{BlockMatrix, BlockPattern, SymmetricBlockMatrix, WeightedCouplings};
 use super::filter::{Filters, filtered_inverse};
 use super::implicit::StepSystem;
 use super::pipeline::pipelined;
+use super::{PARALLEL_MIN_LEN, add_rows};
 use crate::components::Csr;
 
 /// Levels stop coarsening at this many nodes; the coarsest system is then factored
@@ -791,10 +791,7 @@ impl Operator<'_> {
     fn multiply(&self, x: &[Vec3], out: &mut [Vec3]) {
         self.multiply_stored(x, out);
         if self.lumps.is_some() {
-            out.par_iter_mut()
-                .with_min_len(PARALLEL_MIN_LEN)
-                .enumerate()
-                .for_each(|(i, out)| *out += self.shift(i) * x[i]);
+            add_rows(out, |i| self.shift(i) * x[i]);
         }
     }
 
@@ -1424,9 +1421,7 @@ fn cycle(
     );
     // z += S P c, each row of `P c` added as it is formed.
     let (p, prolongation, correction) = (&coarsening.prolongation, &level.prolongation, &level.coarse_correction);
-    z.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, z)| {
-        *z += a.filtered(i, prolongation.row_product(p, i, correction));
-    });
+    add_rows(z, |i| a.filtered(i, prolongation.row_product(p, i, correction)));
     level.smooth(a, r, z, false);
 }
 
