@@ -40,7 +40,16 @@ pub fn apply_scheduled_edits(
         };
         match &edit.action {
             EditAction::Tear(cut) => {
-                tear(cut, &particles.position, &mut springs, &mut triangles, &mut hinges, &mut membranes, &mut limit);
+                tear(
+                    cut,
+                    &particles.position,
+                    &particles.rest_position,
+                    &mut springs,
+                    &mut triangles,
+                    &mut hinges,
+                    &mut membranes,
+                    &mut limit,
+                );
             }
             EditAction::Pin(selections) => {
                 for particle in

@@ -8,7 +8,9 @@ use crate::components::{
 };
 use crate::solver::elements::bending::quadratic_weights;
 use crate::solver::elements::hinge::hinge_angle;
-use crate::solver::elements::{BendingFace, BendingLaw, BendingRigidity, MembraneElement, NO_HINGE};
+use crate::solver::elements::{
+    BendingFace, BendingLaw, BendingRigidity, BendingSurface, MembraneElement, NO_HINGE, QuadraticBending,
+};
 
 /// Regularisation of Zheng's law, as a fraction of κ₀: below κ₀/100 the law is linear.
 const ZHENG_REGULARISATION: f32 = 0.01;
@@ -61,7 +63,8 @@ const FLAT_REST: f32 = 1e-3;
 
 /// Bending over a surface at rest positions `x`: a hinge on every interior edge and a
 /// face for every triangle with at least one, its coefficients in the warp/weft frame
-/// (warp along `warp`, projected on each triangle). Quadratic bending is refused, with
+/// (warp along `warp`, projected on each triangle); for quadratic bending only the
+/// constant Jacobian they make ([`QuadraticBending`]). Quadratic bending is refused, with
 /// what to do, where the surface is not flat at rest or a triangle beside a hinge has no
 /// area.
 pub fn build_bending(
@@ -146,7 +149,7 @@ pub fn build_bending(
         });
     }
     if bending.law == BendingLawDesc::Quadratic {
-        result.quadratic = result
+        let weights: Vec<[f32; 4]> = result
             .vertices
             .iter()
             .zip(&result.rest_angle)
@@ -163,6 +166,10 @@ pub fn build_bending(
                 quadratic_weights(p).ok_or_else(|| format!("a triangle beside the edge at {at} m has no area"))
             })
             .collect::<Result<_, _>>()?;
+        // The faces' constant Jacobian is all a step needs of them.
+        let surface = BendingSurface { quadratic: &weights, ..result.view() };
+        let quadratic = QuadraticBending::assemble(x, &surface, warp);
+        return Ok(BendingHinges { law, rigidity: result.rigidity, quadratic, ..BendingHinges::default() });
     }
     Ok(result)
 }
@@ -293,7 +300,7 @@ mod tests {
         let bending = build_bending(&rest, &triangles, &desc, Vec3::X).expect("flat");
         for kappa in [20.0f32, 2.5] {
             let bent = cylinder(&rest, kappa);
-            let energy: f32 = (0..bending.faces.len()).map(|f| bending.view().quadratic_energy(f, &bent)).sum();
+            let energy = bending.quadratic.energy(&bent) as f32;
             let theta = kappa * 0.01;
             let chord = 2.0 * (0.5 * theta).sin() / theta;
             let expected = 0.5 * 3e-5 * kappa * kappa * BENT_AREA * chord.powi(4);

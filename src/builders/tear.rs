@@ -2,7 +2,10 @@
 
 use glam::Vec3;
 
-use crate::components::{BendingHinges, MembraneTriangles, Springs, StrainLimit, Triangles};
+use super::surface::build_bending;
+use crate::components::{
+    BendingDesc, BendingHinges, BendingLawDesc, MembraneTriangles, Springs, StrainLimit, Triangles,
+};
 use crate::solver::elements::NO_HINGE;
 
 /// A cut: the plane through `point` with normal `normal`, limited to `radius` [m] around
@@ -50,10 +53,12 @@ pub struct Torn {
 }
 
 /// Removes every spring, triangle, hinge, membrane triangle and limited edge that `cut`
-/// severs at positions `x`.
+/// severs at positions `x`. Quadratic bending, kept only as its faces' Jacobian, is built
+/// again at the rest positions `rest` over the triangles left.
 pub fn tear(
     cut: &Cut,
     x: &[Vec3],
+    rest: &[Vec3],
     springs: &mut Springs,
     triangles: &mut Triangles,
     hinges: &mut BendingHinges,
@@ -67,17 +72,29 @@ pub fn tear(
     triangles.indices.retain(|t| !severs(t));
     let keep: Vec<bool> = limit.pairs.iter().map(|p| !severs(p)).collect();
     retain_parallel(&mut limit.pairs, &mut limit.rest_length, &keep);
-    let hinges_before = hinges.vertices.len();
-    cut_bending(hinges, |corners| severs(corners));
+    let hinges_before = hinges.hinge_count();
+    match hinges.is_quadratic() {
+        true => *hinges = quadratic_over(hinges, rest, &triangles.indices),
+        false => cut_bending(hinges, |corners| severs(corners)),
+    }
     let keep: Vec<bool> = membranes.indices.iter().map(|t| !severs(t)).collect();
     let membranes_before = membranes.indices.len();
     retain_parallel(&mut membranes.indices, &mut membranes.elements, &keep);
     Torn {
         springs: removed_springs,
         triangles: before - triangles.len(),
-        hinges: hinges_before - hinges.vertices.len(),
+        hinges: hinges_before - hinges.hinge_count(),
         membranes: membranes_before - membranes.indices.len(),
     }
+}
+
+/// `bending`'s quadratic bending over `triangles` at rest positions `rest`: a hinge on
+/// each interior edge left, and a face on each triangle left beside one.
+fn quadratic_over(bending: &BendingHinges, rest: &[Vec3], triangles: &[[u32; 3]]) -> BendingHinges {
+    let r = bending.rigidity;
+    let desc = BendingDesc { warp: r.warp, weft: r.weft, twist: Some(r.twist), law: BendingLawDesc::Quadratic };
+    build_bending(rest, triangles, &desc, bending.quadratic.warp)
+        .expect("every hinge left was one of the cloth's, flat with two triangles of area when it was built")
 }
 
 /// Removes the hinges and faces that `severs`, renumbering the faces' hinges; a face
@@ -93,8 +110,6 @@ fn cut_bending(hinges: &mut BendingHinges, severs: impl Fn(&[u32]) -> bool) {
         }
     }
     retain_parallel(&mut hinges.vertices, &mut hinges.rest_angle, &keep);
-    // Quadratic bending's weights, one a hinge (none for the other laws).
-    retain_kept(&mut hinges.quadratic, &keep);
     hinges.faces.retain_mut(|face| {
         for h in &mut face.hinges {
             if *h != NO_HINGE {
@@ -133,11 +148,11 @@ mod tests {
         let cut = Cut { point: Vec3::new(0.5, 0.0, 0.0), normal: Vec3::X, radius: Some(1.0) };
         let (mut hinges, mut membranes, mut limit) =
             (BendingHinges::default(), MembraneTriangles::default(), StrainLimit::default());
-        let torn = tear(&cut, &x, &mut springs, &mut triangles, &mut hinges, &mut membranes, &mut limit);
+        let torn = tear(&cut, &x, &x, &mut springs, &mut triangles, &mut hinges, &mut membranes, &mut limit);
         assert_eq!((torn.springs, torn.triangles), (1, 0));
         assert_eq!(springs.pairs, vec![[2, 3], [0, 2]]);
         let everywhere = Cut { radius: None, ..cut };
-        let torn = tear(&everywhere, &x, &mut springs, &mut triangles, &mut hinges, &mut membranes, &mut limit);
+        let torn = tear(&everywhere, &x, &x, &mut springs, &mut triangles, &mut hinges, &mut membranes, &mut limit);
         assert_eq!((torn.springs, torn.triangles), (1, 1));
     }
 }

@@ -3,11 +3,12 @@
 use bevy_ecs::prelude::*;
 
 use crate::solver::elements::{
-    BendingFace, BendingLaw, BendingRigidity, BendingSurface, MembraneElement, MembraneMaterial,
+    BendingFace, BendingLaw, BendingRigidity, BendingSurface, MembraneElement, MembraneMaterial, QuadraticBending,
 };
 
 /// Bending over the cloth's surface (B3, Z2): hinges on interior edges and the faces whose
-/// curvature their angles make (see [`crate::solver::elements::bending`]).
+/// curvature their angles make (see [`crate::solver::elements::bending`]); under quadratic
+/// bending only the constant Jacobian they make, the hinges and faces left empty.
 #[derive(Component, Debug, Clone, PartialEq)]
 pub struct BendingHinges {
     /// `[o₁, o₂, i, j]` of each hinge (see [`crate::solver::elements::hinge`]).
@@ -20,9 +21,8 @@ pub struct BendingHinges {
     pub law: BendingLaw,
     /// Rigidities by direction.
     pub rigidity: BendingRigidity,
-    /// Each hinge's weights for quadratic bending (`law: Quadratic`), empty otherwise; see
-    /// [`crate::solver::elements::bending::quadratic_weights`].
-    pub quadratic: Vec<[f32; 4]>,
+    /// Quadratic bending's constant Jacobian (`law: Quadratic`), empty otherwise.
+    pub quadratic: QuadraticBending,
 }
 
 impl Default for BendingHinges {
@@ -33,7 +33,7 @@ impl Default for BendingHinges {
             faces: Vec::new(),
             law: BendingLaw::Linear,
             rigidity: BendingRigidity { warp: 0.0, weft: 0.0, twist: 0.0 },
-            quadratic: Vec::new(),
+            quadratic: QuadraticBending::default(),
         }
     }
 }
@@ -45,7 +45,16 @@ impl BendingHinges {
         !self.quadratic.is_empty()
     }
 
-    /// The surface as the bending kernels see it.
+    /// Number of hinges (interior edges that bend).
+    pub fn hinge_count(&self) -> usize {
+        match self.is_quadratic() {
+            true => self.quadratic.hinge_count(),
+            false => self.vertices.len(),
+        }
+    }
+
+    /// The surface as the bending kernels see it (their faces, not quadratic bending's
+    /// Jacobian).
     pub fn view(&self) -> BendingSurface<'_> {
         BendingSurface {
             hinges: &self.vertices,
@@ -53,7 +62,7 @@ impl BendingHinges {
             faces: &self.faces,
             law: self.law,
             rigidity: self.rigidity,
-            quadratic: &self.quadratic,
+            quadratic: &[],
         }
     }
 }

@@ -124,11 +124,14 @@ impl ClothTopology {
     ) -> Self {
         let count = inv_mass.len();
         let springs_stencils = || springs.pairs.iter().map(|p| &p[..]);
-        // Every coupling, the bending faces' across an edge among them.
+        // Every coupling, the bending faces' across an edge among them (under quadratic
+        // bending its pairs).
+        let quadratic: Vec<[u32; 2]> = hinges.quadratic.pairs().map(|(i, j, _)| [i, j]).collect();
         let whole = BlockPattern::from_stencils(
             count,
             springs_stencils()
                 .chain(hinges.faces.iter().map(|f| &f.vertices[..]))
+                .chain(quadratic.iter().map(|p| &p[..]))
                 .chain(membranes.indices.iter().map(|t| &t[..])),
         );
         // Those of particles that share a spring or a triangle: the multigrid's finest

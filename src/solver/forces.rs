@@ -93,12 +93,13 @@ pub struct ForceScratch {
 /// Quadratic bending's Jacobian, constant: for each block the topology's pattern stores
 /// (those within a triangle: the pattern leaves out the faces' couplings across an edge)
 /// the `s` of its `s I`, which the derivatives start from instead of zero, and the
-/// couplings across an edge as [`ConstantCouplings`]; summed face by face once per
-/// topology. Added face by face in every step, its 21 blocks a face took 0.5 ms of the
-/// 64² hang scene's 1.5 ms assembly.
+/// couplings across an edge as [`ConstantCouplings`]; placed from the cloth's
+/// [`QuadraticBending`](crate::solver::elements::QuadraticBending) once per topology.
+/// Added face by face in every step, its 21 blocks a face took 0.5 ms of the 64² hang
+/// scene's 1.5 ms assembly.
 #[derive(Debug, Clone, Default)]
 struct QuadraticBlocks {
-    /// The topology's build and the number of faces the scales were found for.
+    /// The topology's build and the number of pairs the scales were found for.
     key: Option<(u32, usize)>,
     scales: Vec<f32>,
     couplings: ConstantCouplings,
@@ -112,20 +113,22 @@ impl QuadraticBlocks {
         if !hinges.is_quadratic() {
             return &[];
         }
-        let key = Some((topology.builds, hinges.faces.len()));
+        let bending = &hinges.quadratic;
+        let key = Some((topology.builds, bending.pair_count()));
         if self.key != key {
             self.key = key;
             let pattern = &topology.pattern;
             self.scales.clear();
             self.scales.resize(pattern.upper.last().map_or(0, |&size| size as usize), 0.0);
-            let (bending, mut across) = (hinges.view(), Vec::new());
-            for (f, face) in hinges.faces.iter().enumerate() {
-                let pairs = upper_pairs::<6>().map(|(a, b)| (face.vertices[a], face.vertices[b]));
-                for ((p, q), scale) in pairs.zip(bending.quadratic_jacobian(f)) {
-                    match pattern.upper_index(p, q) {
-                        Some(slot) => self.scales[slot as usize] += scale,
-                        None => across.extend([(p, q, scale), (q, p, scale)]),
-                    }
+            for (i, &scale) in bending.diagonal().iter().enumerate() {
+                let slot = pattern.upper_index(i as u32, i as u32).expect("the pattern has every diagonal block");
+                self.scales[slot as usize] += scale;
+            }
+            let mut across = Vec::new();
+            for (p, q, scale) in bending.pairs() {
+                match pattern.upper_index(p, q) {
+                    Some(slot) => self.scales[slot as usize] += scale,
+                    None => across.extend([(p, q, scale), (q, p, scale)]),
                 }
             }
             self.couplings = ConstantCouplings::new(pattern.rows(), across);
@@ -135,8 +138,8 @@ impl QuadraticBlocks {
 
     /// The couplings across an edge last found for `model`, if its bending is quadratic.
     fn couplings(&self, model: &ForceModel<'_>) -> Option<&ConstantCouplings> {
-        let current =
-            model.hinges.is_quadratic() && self.key == Some((model.topology.builds, model.hinges.faces.len()));
+        let current = model.hinges.is_quadratic()
+            && self.key == Some((model.topology.builds, model.hinges.quadratic.pair_count()));
         current.then_some(&self.couplings)
     }
 }
@@ -648,7 +651,7 @@ impl ForceModel<'_> {
         });
         let bending = self.hinges.view();
         let hinges = if self.hinges.is_quadratic() {
-            reduce::sum(self.hinges.faces.len(), |f| f64::from(bending.quadratic_energy(f, x)))
+            self.hinges.quadratic.energy(x)
         } else {
             let delta = &mut scratch.hinge_delta;
             delta.resize(self.hinges.vertices.len(), 0.0);

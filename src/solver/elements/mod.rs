@@ -9,6 +9,7 @@ pub mod couplings;
 pub mod dual;
 pub mod hinge;
 pub mod membrane;
+pub mod quadratic;
 pub mod spring;
 
 #[cfg(test)]
@@ -18,4 +19,5 @@ pub use bending::{BendingFace, BendingLaw, BendingRigidity, BendingSurface, NO_H
 pub use block::{BlockMatrix, BlockPattern, ElementPositions, SymmetricBlockMatrix, VelocityJacobian};
 pub use couplings::{ConstantCouplings, WeightedCouplings};
 pub use membrane::{MembraneElement, MembraneMaterial};
+pub use quadratic::QuadraticBending;
 pub use spring::SpringElement;
