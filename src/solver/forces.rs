@@ -124,13 +124,12 @@ impl QuadraticBlocks {
                 let slot = pattern.upper_index(i as u32, i as u32).expect("the pattern has every diagonal block");
                 self.scales[slot as usize] += scale;
             }
-            let mut across = Vec::new();
             for (p, q, scale) in bending.pairs() {
-                match pattern.upper_index(p, q) {
-                    Some(slot) => self.scales[slot as usize] += scale,
-                    None => across.extend([(p, q, scale), (q, p, scale)]),
+                if let Some(slot) = pattern.upper_index(p, q) {
+                    self.scales[slot as usize] += scale;
                 }
             }
+            let across = || bending.pairs().filter(|&(p, q, _)| pattern.upper_index(p, q).is_none());
             self.couplings = ConstantCouplings::new(pattern.rows(), across);
         }
         &self.scales
