@@ -158,3 +158,28 @@ fn a_torn_sheet_bending_quadratically_hangs_as_two_halves() {
     assert!((left.x + 0.5).abs() < 0.02, "left half hangs below its pin at x = -0.5: {left}");
     assert!((right.x - 0.5).abs() < 0.02, "right half hangs below its pin at x = 0.5: {right}");
 }
+
+/// A tear that severs nothing builds a turned, warp-aligned sheet's quadratic bending again
+/// exactly as the scene built it: the rest positions and the warp it keeps are the ones
+/// its faces were made from.
+#[test]
+fn a_tear_that_severs_nothing_leaves_quadratic_bending_as_it_was() {
+    let mut sim = common::simulation(
+        "Scene(name: \"edit\", solver: (integrator: ImplicitEuler, substeps: 2),
+          time: (fps: 60, duration_s: 1.0),
+          cloths: [(name: \"sheet\", shape: Grid(size: (1.0, 0.6), resolution: (12, 9)),
+                    placement: (translation: (0.0, 2.0, 0.0), rotation_deg: (-60.0, 25.0, 10.0)),
+                    material: (density: 0.2, membrane: Isotropic(young: 500.0, poisson: 0.3),
+                               bending: (warp: 2e-4, weft: 1e-4, law: Quadratic)),
+                    pins: [Corners([TopLeft, TopRight])])],
+          edits: [(at_s: 0.5, cloth: \"sheet\", action: Tear(point: (9.0, 9.0, 9.0), normal: (1.0, 0.0, 0.0),
+                                                                 radius: 0.1))])",
+    );
+    let bending = |sim: &mut Simulation| {
+        sim.world_mut().query::<&BendingHinges>().single(sim.world()).expect("one cloth").clone()
+    };
+    let spawned = bending(&mut sim);
+    assert!(spawned.is_quadratic());
+    common::run_frames(&mut sim, 40);
+    assert_eq!(bending(&mut sim), spawned);
+}
