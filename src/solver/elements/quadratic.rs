@@ -56,28 +56,23 @@ impl QuadraticBending {
         }
         // Stable, so each pair's scales are summed in face order.
         pairs.sort_by_key(|&(i, j, _)| (i, j));
-        let mut bending = Self { warp, hinges: surface.hinges.len(), diagonal, ..Self::default() };
-        let distinct = pairs.windows(2).filter(|w| (w[0].0, w[0].1) != (w[1].0, w[1].1)).count() + 1;
-        bending.columns.reserve_exact(distinct);
-        bending.scales.reserve_exact(distinct);
-        bending.offsets.reserve_exact(particles + 1);
-        bending.offsets.push(0);
-        let mut next = pairs.into_iter().peekable();
-        for i in 0..particles as u32 {
-            while let Some((_, j, s)) = next.next_if(|pair| pair.0 == i) {
-                let row_start = *bending.offsets.last().expect("pushed") as usize;
-                match bending.columns.last() {
-                    Some(&last) if last == j && bending.columns.len() > row_start => {
-                        *bending.scales.last_mut().expect("a column has its scale") += s;
-                    }
-                    _ => {
-                        bending.columns.push(j);
-                        bending.scales.push(s);
-                    }
-                }
+        pairs.dedup_by(|next, kept| {
+            let same = (next.0, next.1) == (kept.0, kept.1);
+            if same {
+                kept.2 += next.2;
             }
-            bending.offsets.push(bending.columns.len() as u32);
+            same
+        });
+        let mut offsets = vec![0u32; particles + 1];
+        for &(i, _, _) in &pairs {
+            offsets[i as usize + 1] += 1;
         }
+        for r in 0..particles {
+            offsets[r + 1] += offsets[r];
+        }
+        let (columns, scales) = (pairs.iter().map(|p| p.1).collect(), pairs.iter().map(|p| p.2).collect());
+        let mut bending =
+            Self { warp, hinges: surface.hinges.len(), rest_energy: 0.0, diagonal, offsets, columns, scales };
         bending.rest_energy = bending.stored(rest);
         bending
     }
