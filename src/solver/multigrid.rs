@@ -46,9 +46,9 @@
 use glam::{Mat3, Vec3, Vec3A, Vec4};
 use rayon::prelude::*;
 
-use super::elements::block::{block_product, by_parts, times, transposed_times};
+use super::elements::block::{block_product, by_parts, times};
 use super::elements::spring::{outer, skew};
-use super::elements::{BlockMatrix, BlockPattern, SymmetricBlockMatrix, WeightedCouplings};
+use super::elements::{BlockMatrix, BlockPattern, HalfBlock, HalfBlockMatrix, SymmetricBlockMatrix, WeightedCouplings};
 use super::filter::{Filters, filtered_inverse};
 use super::implicit::StepSystem;
 use super::pipeline::pipelined;
@@ -288,8 +288,8 @@ impl Restriction {
     }
 
     /// `out = Pᵀ t`, for `P`'s `blocks` over `p`, with `buffer` for the chunks' sums.
-    fn apply(&self, p: &BlockPattern, blocks: &[Mat3], t: &[Vec3], buffer: &mut Vec<Vec3>, out: &mut [Vec3]) {
-        let transposed = |block: &Mat3, v: Vec3| Vec3::from(transposed_times(block, Vec3A::from(v)));
+    fn apply(&self, p: &BlockPattern, blocks: &[HalfBlock], t: &[Vec3], buffer: &mut Vec<Vec3>, out: &mut [Vec3]) {
+        let transposed = |block: &HalfBlock, v: Vec3| Vec3::from(block.transposed_times(Vec3A::from(v)));
         match self {
             Self::ByColumns { slots, rows } => {
                 out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(c, out)| {
@@ -377,8 +377,9 @@ struct Level {
     /// axes of its points' spread, a column zeroed where turning about it hardly moves
     /// them (a line of points about itself, a single point).
     frames: Vec<Mat3>,
-    /// The filtered, smoothed prolongator `S P` from the next coarser level.
-    prolongation: BlockMatrix,
+    /// The filtered, smoothed prolongator `S P` from the next coarser level, rounded to
+    /// bfloat16 ([`HalfBlock`]).
+    prolongation: HalfBlockMatrix,
     /// Estimate of the dominant mode of `D⁻¹ A`, kept for the next system.
     dominant: Vec<Vec3>,
     /// The smoothing's products, then the residual after smoothing.
@@ -830,21 +831,6 @@ impl Operator<'_> {
     }
 }
 
-/// Zeroes the blocks of `pattern` and lets `group(i, columns, blocks)` fill each group of
-/// `size` rows from row `i` (their `blocks`, row after row, and the sorted `columns` they
-/// share), groups in parallel. Row by row, a product of sparse matrices walks its
-/// operands' rows once (Gustavson's order) instead of searching for each block of the
-/// result; each block still sums its terms in one fixed order.
-fn fill_rows(
-    pattern: &BlockPattern,
-    size: usize,
-    matrix: &mut BlockMatrix,
-    group: impl Fn(usize, &[u32], &mut [Mat3]) + Sync,
-) {
-    matrix.reset(pattern);
-    pattern.fill_row_range(size, 0..pattern.rows(), &mut matrix.blocks, &group);
-}
-
 /// Sets `out` to `system` (over `pattern`) over `fine`, a pattern of fewer blocks: the
 /// blocks `fine` has (zero where `pattern` has none), and each block `B` it leaves out
 /// moved onto its row's diagonal ([`lumped`]), so that a rigid translation meets the same
@@ -1002,6 +988,14 @@ fn length(v: &[Vec3]) -> f64 {
     v.iter().map(|x| f64::from(x.length_squared())).sum::<f64>().sqrt()
 }
 
+thread_local! {
+    /// Per thread, the blocks of the group of a prolongator's rows being formed, in
+    /// `f32`, before they are rounded to bfloat16: a group's rows, not the whole
+    /// prolongator in `f32` beside its rounding (on the 256² hang scene 8.8 MB, 135 bytes
+    /// a particle at the set-up's peak).
+    static FORMING: std::cell::RefCell<Vec<Mat3>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
 impl Level {
     /// The smoothers: inverse diagonal blocks, and weights from the spectral radius of
     /// `D⁻¹ A`, estimated by power iterations that start from the last system's dominant
@@ -1089,6 +1083,8 @@ impl Level {
     /// The rotation blocks of `S P₀` are formed first, into `rotations`, once per node
     /// rather than once for each of the node's neighbours, which took half of the
     /// prolongator's time; its translation blocks are `S` itself ([`Rigid::translation`]).
+    /// Each group of rows is formed in `f32` ([`FORMING`]) and kept rounded to bfloat16
+    /// ([`HalfBlock`]), which the Galerkin product, restriction and prolongation all read.
     fn prolongator(&mut self, a: Operator, coarsening: &Coarsening, points: Points, rotations: &mut Vec<Mat3>) {
         let Level { inverse, weight, centres, frames, prolongation, .. } = self;
         let (weight, rigid) = (*weight, Rigid { coarsening, points, centres, frames });
@@ -1116,25 +1112,34 @@ impl Level {
                 }
             });
         };
-        fill_rows(&coarsening.prolongation, size, prolongation, |first, columns, blocks| {
-            for (r, row) in blocks.chunks_mut(columns.len()).enumerate() {
-                push(first + r, columns, row);
-            }
-            for (s, &coarse) in columns.iter().enumerate() {
-                let pushed = [blocks[s], blocks.get(columns.len() + s).copied().unwrap_or(Mat3::ZERO)];
-                for r in 0..size {
-                    let i = first + r;
-                    let mut smoothed = block_product(&inverse.own[i], &pushed[r]);
-                    if let Some(partner) = inverse.partner.get(i) {
-                        smoothed += block_product(partner, &pushed[1 - r]);
-                    }
-                    let own = match coarse / 2 == rigid.aggregate(i) {
-                        true => tentative(i)[coarse as usize % 2],
-                        false => Mat3::ZERO,
-                    };
-                    blocks[r * columns.len() + s] = own - weight * smoothed;
+        let pattern = &coarsening.prolongation;
+        prolongation.blocks.resize(pattern.columns.len(), HalfBlock::default());
+        pattern.fill_row_range(size, 0..pattern.rows(), &mut prolongation.blocks, &|first, columns, halves| {
+            FORMING.with_borrow_mut(|blocks| {
+                blocks.clear();
+                blocks.resize(halves.len(), Mat3::ZERO);
+                for (r, row) in blocks.chunks_mut(columns.len()).enumerate() {
+                    push(first + r, columns, row);
                 }
-            }
+                for (s, &coarse) in columns.iter().enumerate() {
+                    let pushed = [blocks[s], blocks.get(columns.len() + s).copied().unwrap_or(Mat3::ZERO)];
+                    for r in 0..size {
+                        let i = first + r;
+                        let mut smoothed = block_product(&inverse.own[i], &pushed[r]);
+                        if let Some(partner) = inverse.partner.get(i) {
+                            smoothed += block_product(partner, &pushed[1 - r]);
+                        }
+                        let own = match coarse / 2 == rigid.aggregate(i) {
+                            true => tentative(i)[coarse as usize % 2],
+                            false => Mat3::ZERO,
+                        };
+                        blocks[r * columns.len() + s] = own - weight * smoothed;
+                    }
+                }
+                for (half, block) in halves.iter_mut().zip(blocks.iter()) {
+                    *half = HalfBlock::rounded(*block);
+                }
+            });
         });
     }
 
@@ -1159,7 +1164,7 @@ impl Level {
                 a.for_row(i, |node, block| {
                     let mut at = 0;
                     for s in p.slots(node as usize) {
-                        add_at(columns, blocks, &mut at, p.columns[s], block_product(&block, &prolongation[s]));
+                        add_at(columns, blocks, &mut at, p.columns[s], prolongation[s].after(&block));
                     }
                 });
             });
@@ -1177,7 +1182,7 @@ impl Level {
                     let slots = ap.slots(r);
                     let (products, product_columns) = (&blocks[slots.start - first..slots.end - first], ap.row(r));
                     for s in p.slots(r).filter(|&s| coarse_rows.contains(&(p.columns[s] as usize))) {
-                        let (row, transposed) = (p.columns[s] as usize, prolongation[s].transpose());
+                        let (row, transposed) = (p.columns[s] as usize, Mat3::from(prolongation[s].get().transpose()));
                         let row_slots = coarse.slots(row);
                         let columns = coarse.row(row);
                         let row_blocks =
@@ -1703,8 +1708,8 @@ mod tests {
         let coarsening = &hierarchy.coarsenings[0];
         let (p, count) = (&coarsening.prolongation, coarsening.coarse.rows());
         assert!(matches!(coarsening.restriction, Restriction::ByColumns { .. }), "a small level gathers");
-        let blocks: Vec<Mat3> = (0..p.columns.len() as u32)
-            .map(|k| Mat3::from_cols(irregular(3 * k), irregular(3 * k + 1), irregular(3 * k + 2)))
+        let blocks: Vec<HalfBlock> = (0..p.columns.len() as u32)
+            .map(|k| HalfBlock::rounded(Mat3::from_cols(irregular(3 * k), irregular(3 * k + 1), irregular(3 * k + 2))))
             .collect();
         let t: Vec<Vec3> = (0..p.rows() as u32).map(|i| irregular(i ^ 77)).collect();
         let by_rows = Restriction::by_rows(p, count);

@@ -2,7 +2,8 @@
 //! a cloth: one block row per particle, one block per pair of particles that share an
 //! element. The cloth's derivatives and its implicit system are symmetric and keep only
 //! the blocks on and above the diagonal ([`SymmetricBlockMatrix`]); the multigrid's
-//! prolongators and levels keep every block ([`BlockMatrix`]).
+//! levels keep every block ([`BlockMatrix`]), its prolongators in bfloat16
+//! ([`super::half`]).
 
 use glam::{Mat3, Mat3A, Vec3, Vec3A};
 use rayon::prelude::*;
@@ -241,16 +242,16 @@ impl BlockPattern {
     }
 
     /// Lets `group(i, columns, blocks)` work on each group of `size` rows from row `i`
-    /// within `rows` (whole groups), given their `blocks` (row after row, `blocks` being
-    /// those of `rows`) and the columns of row `i`: halves of the rows in parallel, down
-    /// to [`PARALLEL_MIN_LEN`] blocks. Each block is worked on by one call, so the result
-    /// does not depend on the number of threads.
-    pub(crate) fn fill_row_range(
+    /// within `rows` (whole groups), given their `blocks` (or whatever is kept per block;
+    /// row after row, `blocks` being those of `rows`) and the columns of row `i`: halves
+    /// of the rows in parallel, down to [`PARALLEL_MIN_LEN`] blocks. Each block is worked
+    /// on by one call, so the result does not depend on the number of threads.
+    pub(crate) fn fill_row_range<T: Send>(
         &self,
         size: usize,
         rows: std::ops::Range<usize>,
-        blocks: &mut [Mat3],
-        group: &(impl Fn(usize, &[u32], &mut [Mat3]) + Sync),
+        blocks: &mut [T],
+        group: &(impl Fn(usize, &[u32], &mut [T]) + Sync),
     ) {
         split_rows(&self.offsets, size, rows, blocks, &|i, blocks| group(i, self.row(i), blocks));
     }
