@@ -48,7 +48,7 @@ use rayon::prelude::*;
 
 use super::elements::block::{block_product, by_parts, times};
 use super::elements::spring::{outer, skew};
-use super::elements::{BlockMatrix, BlockPattern, HalfBlock, HalfBlockMatrix, SymmetricBlockMatrix, WeightedCouplings};
+use super::elements::{BlockPattern, HalfBlock, HalfBlockMatrix, SymmetricBlockMatrix, WeightedCouplings};
 use super::filter::{Filters, filtered_inverse};
 use super::implicit::StepSystem;
 use super::pipeline::pipelined;
@@ -155,7 +155,8 @@ struct Coarsening {
     restriction: Restriction,
     /// Blocks of `A P`.
     product: BlockPattern,
-    /// Blocks of the coarser level's matrix `Pᵀ A P`.
+    /// Blocks of the coarser level's matrix `Pᵀ A P`, laid out for a
+    /// [`SymmetricBlockMatrix`].
     coarse: BlockPattern,
 }
 
@@ -207,6 +208,7 @@ impl Hierarchy {
                     row.extend_from_slice(product.row(fine as usize));
                 }
             });
+            let coarse = coarse.with_upper();
             current = coarse.clone();
             let restriction = Restriction::new(&prolongation, count, by_columns, rows_of);
             coarsenings.push(Coarsening { paired, aggregate, members, prolongation, restriction, product, coarse });
@@ -561,8 +563,9 @@ pub struct Multigrid {
     shifts: Vec<f32>,
     /// Per level that has a coarser one, finest first.
     levels: Vec<Level>,
-    /// Matrices of the levels below the finest (whose matrix is `fine`).
-    matrices: Vec<BlockMatrix>,
+    /// Matrices of the levels below the finest (whose matrix is `fine`), stored on and
+    /// above their diagonals.
+    matrices: Vec<SymmetricBlockMatrix>,
     /// Scratch of the levels' setup, one level at a time: per node, the rotation block of
     /// the filtered tentative prolongator `S P₀` ([`Level::prolongator`]), then two chunks
     /// of [`PRODUCT_ROWS`] rows of `A S P` ([`Level::galerkin`]). Kept per level, the two
@@ -693,23 +696,20 @@ fn symmetric_eigen(m: Mat3) -> (Mat3, Vec3) {
 #[derive(Clone, Copy)]
 struct Operator<'a> {
     pattern: &'a BlockPattern,
-    matrix: Matrix<'a>,
+    /// The level's matrix, stored on and above its diagonal. The finest level's products
+    /// are most of a V-cycle's time, and in full its matrix was the largest of the levels.
+    /// The coarse levels' Galerkin products, once kept in full for products that gather
+    /// over rows, are symmetric too: stored so, the Galerkin product adds only their
+    /// upper blocks, and over whole benches alternating hang_64 took 3.88 and 3.91 ms a
+    /// frame against 4.03 and 4.07, hang_128 15.2 and 15.7 against 15.9 and 16.1
+    /// (hang_256 the same, 86.0 and 90.3 against 86.4 and 90.2), hang_256's heap peaking
+    /// at 82.8 MB against 84.1.
+    matrix: &'a SymmetricBlockMatrix,
     /// On the finest level of a system with constant couplings beside its pattern, what
     /// they lump onto each diagonal, which the operator adds to the system's own blocks
     /// instead of a lumped copy of them ([`Multigrid::prepare`]).
     lumps: Option<WeightedCouplings<'a>>,
     filter: Option<&'a Filters>,
-}
-
-/// A level's matrix. The finest level's is symmetric and stored on and above its
-/// diagonal, as the system is: its products are most of a V-cycle's time and it is
-/// lumped from the system at every step, and stored in full it was the largest matrix
-/// of the levels. The coarse levels' Galerkin products are stored in full, a product
-/// a gather over rows.
-#[derive(Clone, Copy)]
-enum Matrix<'a> {
-    Full(&'a BlockMatrix),
-    Symmetric(&'a SymmetricBlockMatrix),
 }
 
 /// The finest level's operator, within the constraint filter: `fine`, the system lumped
@@ -723,22 +723,15 @@ fn finest_operator<'a>(
     filter: &'a Filters,
 ) -> Operator<'a> {
     match (system.far, &hierarchy.fine) {
-        (None, Some(pattern)) => {
-            Operator { pattern, matrix: Matrix::Symmetric(fine), lumps: None, filter: Some(filter) }
-        }
-        (far, _) => Operator {
-            pattern: system.pattern,
-            matrix: Matrix::Symmetric(system.matrix),
-            lumps: far,
-            filter: Some(filter),
-        },
+        (None, Some(pattern)) => Operator { pattern, matrix: fine, lumps: None, filter: Some(filter) },
+        (far, _) => Operator { pattern: system.pattern, matrix: system.matrix, lumps: far, filter: Some(filter) },
     }
 }
 
 /// A coarse level's operator: its Galerkin `matrix` over the `coarse` pattern, which no
 /// filter restricts (the finest level's is in the prolongator).
-fn coarse_operator<'a>(coarse: &'a BlockPattern, matrix: &'a BlockMatrix) -> Operator<'a> {
-    Operator { pattern: coarse, matrix: Matrix::Full(matrix), lumps: None, filter: None }
+fn coarse_operator<'a>(coarse: &'a BlockPattern, matrix: &'a SymmetricBlockMatrix) -> Operator<'a> {
+    Operator { pattern: coarse, matrix, lumps: None, filter: None }
 }
 
 impl Operator<'_> {
@@ -766,29 +759,20 @@ impl Operator<'_> {
 
     /// Block `(row, column)` of the matrix, zero where the pattern has none.
     fn block(&self, row: u32, column: u32) -> Mat3 {
-        match self.matrix {
-            Matrix::Full(m) => m.block(self.pattern, row, column),
-            Matrix::Symmetric(m) if row == column => {
-                m.block(self.pattern, row, column) + Mat3::from_diagonal(Vec3::splat(self.shift(row as usize)))
-            }
-            Matrix::Symmetric(m) => m.block(self.pattern, row, column),
+        let block = self.matrix.block(self.pattern, row, column);
+        match row == column {
+            true => block + Mat3::from_diagonal(Vec3::splat(self.shift(row as usize))),
+            false => block,
         }
     }
 
     /// Calls `visit(column, block)` for every block of row `i`, columns ascending.
     #[inline]
     fn for_row(&self, i: usize, mut visit: impl FnMut(u32, Mat3)) {
-        match self.matrix {
-            Matrix::Full(m) => {
-                for k in self.pattern.slots(i) {
-                    visit(self.pattern.columns[k], m.blocks[k]);
-                }
-            }
-            Matrix::Symmetric(m) => m.for_row(self.pattern, i, |j, block, _| match j as usize == i {
-                true => visit(j, block + Mat3::from_diagonal(Vec3::splat(self.shift(i)))),
-                false => visit(j, block),
-            }),
-        }
+        self.matrix.for_row(self.pattern, i, |j, block, _| match j as usize == i {
+            true => visit(j, block + Mat3::from_diagonal(Vec3::splat(self.shift(i)))),
+            false => visit(j, block),
+        });
     }
 
     /// `out = A x`.
@@ -802,32 +786,17 @@ impl Operator<'_> {
     /// `out = A x` less the lumps' part, `A x − l_i x_i`: the stored blocks' product
     /// alone, whose users add the lumps' row by row in a pass they make anyway.
     fn multiply_stored(&self, x: &[Vec3], out: &mut [Vec3]) {
-        match self.matrix {
-            Matrix::Full(m) => m.multiply(self.pattern, x, out),
-            Matrix::Symmetric(m) => m.multiply(self.pattern, x, out),
-        }
+        self.matrix.multiply(self.pattern, x, out);
     }
 
-    /// `out = S (r − A z)`: a gather over rows of a full matrix; the product, each stored
-    /// block read once, then the difference, for a symmetric one.
+    /// `out = S (r − A z)`: the product, each stored block read once, then the
+    /// difference.
     fn residual(&self, r: &[Vec3], z: &[Vec3], out: &mut [Vec3]) {
-        let pattern = self.pattern;
-        match self.matrix {
-            Matrix::Full(_) => {
-                out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, out)| {
-                    let mut sum = Vec3A::from(r[i]);
-                    self.for_row(i, |j, block| sum -= times(&block, Vec3A::from(z[j as usize])));
-                    *out = self.filtered(i, Vec3::from(sum));
-                });
-            }
-            Matrix::Symmetric(matrix) => {
-                matrix.multiply(pattern, z, out);
-                out.par_iter_mut()
-                    .with_min_len(PARALLEL_MIN_LEN)
-                    .enumerate()
-                    .for_each(|(i, out)| *out = self.filtered(i, r[i] - *out - self.shift(i) * z[i]));
-            }
-        }
+        self.matrix.multiply(self.pattern, z, out);
+        out.par_iter_mut()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .enumerate()
+            .for_each(|(i, out)| *out = self.filtered(i, r[i] - *out - self.shift(i) * z[i]));
     }
 }
 
@@ -1149,7 +1118,13 @@ impl Level {
     /// the chunk before is added into the coarse matrix: fine row `r` adds
     /// `(S P)_rRᵀ (A S P)_r` to each coarse row `R` of its row of `S P`, rows in order, so
     /// each coarse block sums its terms in fine-row order on any number of threads.
-    fn galerkin(&mut self, a: Operator, coarsening: &Coarsening, out: &mut BlockMatrix, buffer: &mut Vec<Mat3>) {
+    fn galerkin(
+        &mut self,
+        a: Operator,
+        coarsening: &Coarsening,
+        out: &mut SymmetricBlockMatrix,
+        buffer: &mut Vec<Mat3>,
+    ) {
         let Coarsening { prolongation: p, product: ap, coarse, .. } = coarsening;
         let prolongation = &self.prolongation.blocks;
         let rows = ap.rows();
@@ -1176,20 +1151,21 @@ impl Level {
             // Split at the middle fine row's first coarse node: near fine rows restrict to
             // near coarse rows, so the halves share the additions.
             let middle = (rows.start + rows.end) / 2;
-            let split = p.row(middle).first().map_or(0, |&node| node as usize);
-            out.add_by_halves(coarse, split, |coarse_rows, coarse_blocks, coarse_first| {
+            let split = p.row(middle).first().map_or(0, |&node| (node as usize).min(coarse.rows()));
+            out.add_by_parts(coarse, &[0, split, coarse.rows()], |_, coarse_rows, coarse_blocks, coarse_first| {
                 for r in rows.clone() {
                     let slots = ap.slots(r);
                     let (products, product_columns) = (&blocks[slots.start - first..slots.end - first], ap.row(r));
                     for s in p.slots(r).filter(|&s| coarse_rows.contains(&(p.columns[s] as usize))) {
-                        let (row, transposed) = (p.columns[s] as usize, Mat3::from(prolongation[s].get().transpose()));
-                        let row_slots = coarse.slots(row);
-                        let columns = coarse.row(row);
+                        let (row, transposed) = (p.columns[s], Mat3::from(prolongation[s].get().transpose()));
+                        let stored = coarse.symmetric_row(row as usize);
                         let row_blocks =
-                            &mut coarse_blocks[row_slots.start - coarse_first..row_slots.end - coarse_first];
+                            &mut coarse_blocks[stored.storage.start - coarse_first..stored.storage.end - coarse_first];
+                        // The row's blocks from its diagonal on: those below are mirrors.
+                        let from = product_columns.partition_point(|&column| column < row);
                         let mut at = 0;
-                        for (&column, product) in product_columns.iter().zip(products) {
-                            add_at(columns, row_blocks, &mut at, column, block_product(&transposed, product));
+                        for (&column, product) in product_columns[from..].iter().zip(&products[from..]) {
+                            add_at(stored.above, row_blocks, &mut at, column, block_product(&transposed, product));
                         }
                     }
                 }
@@ -1202,27 +1178,23 @@ impl Level {
     /// they multiply the error by the same polynomial in `D⁻¹ A`, so smoothing before and
     /// after the coarse correction keeps the V-cycle symmetric.
     ///
-    /// Over a symmetric matrix (the finest level's) the step takes the residual from the
-    /// product itself, `r − A z` row by row, instead of a pass of its own that the step
-    /// would read back, the filter being in `D⁻¹` ([`Jacobi`]): one parallel loop and
-    /// one pass over three vectors fewer a sweep.
+    /// The step takes the residual from the product itself, `r − A z` row by row,
+    /// instead of a pass of its own that the step would read back, the filter being in
+    /// `D⁻¹` ([`Jacobi`]): one parallel loop and one pass over three vectors fewer a
+    /// sweep.
     fn smooth(&mut self, a: Operator, r: &[Vec3], z: &mut [Vec3], first: bool) {
         self.step.resize(z.len(), Vec3::ZERO);
-        let symmetric = matches!(a.matrix, Matrix::Symmetric(_));
         for (sweep, &(keep, gain)) in self.chebyshev.iter().enumerate() {
             let start = first && sweep == 0;
-            match (start, symmetric) {
-                (true, _) => {}
-                (false, true) => a.multiply_stored(z, &mut self.scratch),
-                (false, false) => a.residual(r, z, &mut self.scratch),
+            if !start {
+                a.multiply_stored(z, &mut self.scratch);
             }
             let (inverse, scratch, step) = (&self.inverse, &self.scratch, &mut self.step);
             let update = Update { inverse, first: sweep == 0, start, keep, gain };
-            match (start, symmetric, a.lumps.is_some()) {
-                (true, ..) => update.apply(z, step, |i, _| r[i]),
-                (false, true, true) => update.apply(z, step, |i, z| r[i] - scratch[i] - a.shift(i) * z),
-                (false, true, false) => update.apply(z, step, |i, _| r[i] - scratch[i]),
-                (false, false, _) => update.apply(z, step, |i, _| scratch[i]),
+            match (start, a.lumps.is_some()) {
+                (true, _) => update.apply(z, step, |i, _| r[i]),
+                (false, true) => update.apply(z, step, |i, z| r[i] - scratch[i] - a.shift(i) * z),
+                (false, false) => update.apply(z, step, |i, _| r[i] - scratch[i]),
             }
         }
     }
@@ -1361,7 +1333,7 @@ impl Multigrid {
         self.prolongators_new = positions.is_some();
         let depth = hierarchy.coarsenings.len();
         self.levels.resize_with(depth, Level::default);
-        self.matrices.resize_with(depth, BlockMatrix::default);
+        self.matrices.resize_with(depth, SymmetricBlockMatrix::default);
         let finest = finest_operator(hierarchy, &self.fine, system, filter);
         for (l, coarsening) in hierarchy.coarsenings.iter().enumerate() {
             let (above, below) = self.matrices.split_at_mut(l);
@@ -1412,7 +1384,7 @@ impl Multigrid {
 fn cycle(
     levels: &mut [Level],
     coarsenings: &[Coarsening],
-    matrices: &[BlockMatrix],
+    matrices: &[SymmetricBlockMatrix],
     coarsest: &mut CoarsestSolver,
     a: Operator,
     r: &[Vec3],

@@ -1,9 +1,8 @@
 //! Block-sparse matrices of 3×3 blocks, the shape of every derivative ∂f/∂x and ∂f/∂v of
 //! a cloth: one block row per particle, one block per pair of particles that share an
 //! element. The cloth's derivatives and its implicit system are symmetric and keep only
-//! the blocks on and above the diagonal ([`SymmetricBlockMatrix`]); the multigrid's
-//! levels keep every block ([`BlockMatrix`]), its prolongators in bfloat16
-//! ([`super::half`]).
+//! the blocks on and above the diagonal ([`SymmetricBlockMatrix`]), as do the
+//! multigrid's levels; its prolongators keep every block, in bfloat16 ([`super::half`]).
 
 use glam::{Mat3, Mat3A, Vec3, Vec3A};
 use rayon::prelude::*;
@@ -384,63 +383,6 @@ impl<const M: usize> ElementPositions<M> {
     }
 }
 
-/// A matrix of 3×3 blocks over a [`BlockPattern`], stored in full (both triangles), so a
-/// product is a parallel gather over rows in a fixed order.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct BlockMatrix {
-    /// One block per pattern slot.
-    pub blocks: Vec<Mat3>,
-}
-
-impl BlockMatrix {
-    /// Zeroes the matrix and sizes it for `pattern`, in parallel: on the 256² hang scene
-    /// the matrix is 45 MB, and zeroing it on one thread idled the other.
-    pub fn reset(&mut self, pattern: &BlockPattern) {
-        self.blocks.resize(pattern.columns.len(), Mat3::ZERO);
-        self.blocks.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).for_each(|block| *block = Mat3::ZERO);
-    }
-
-    /// Adds to the rows below `split` and to the rest in two parallel tasks:
-    /// `add(rows, blocks, first)` gets the blocks of `rows` (over `pattern`), the first of
-    /// them at slot `first`, and must add only into those. Terms that each task adds in a
-    /// fixed order keep that order, and so their sums, on any number of threads; the
-    /// serial additions of an assembly become two.
-    pub fn add_by_halves(
-        &mut self,
-        pattern: &BlockPattern,
-        split: usize,
-        add: impl Fn(std::ops::Range<usize>, &mut [Mat3], usize) + Sync,
-    ) {
-        let rows = pattern.rows();
-        add_by_parts(&pattern.offsets, &mut self.blocks, &[0, split.min(rows), rows], &|_, rows, blocks, first| {
-            add(rows, blocks, first);
-        });
-    }
-
-    /// `out = self · x`.
-    pub fn multiply(&self, pattern: &BlockPattern, x: &[Vec3], out: &mut [Vec3]) {
-        out.par_iter_mut()
-            .with_min_len(PARALLEL_MIN_LEN)
-            .enumerate()
-            .for_each(|(i, out)| *out = self.row_product(pattern, i, x));
-    }
-
-    /// Row `i` of the matrix times `x`, blocks in column order.
-    #[inline]
-    pub fn row_product(&self, pattern: &BlockPattern, i: usize, x: &[Vec3]) -> Vec3 {
-        let mut sum = Vec3A::ZERO;
-        for k in pattern.slots(i) {
-            sum += times(&self.blocks[k], Vec3A::from(x[pattern.columns[k] as usize]));
-        }
-        Vec3::from(sum)
-    }
-
-    /// The block `(row, column)`, zero where the pattern has none.
-    pub fn block(&self, pattern: &BlockPattern, row: u32, column: u32) -> Mat3 {
-        pattern.slot(row, column).map_or(Mat3::ZERO, |s| self.blocks[s as usize])
-    }
-}
-
 /// Rows a chunk of [`SymmetricBlockMatrix::multiply`] at least.
 const PRODUCT_CHUNK: usize = 64;
 
@@ -517,8 +459,10 @@ impl SymmetricBlockMatrix {
     }
 
     /// Lets `add(part, rows, blocks, first)` add to each part of the rows, between
-    /// consecutive `bounds`, in parallel, as [`BlockMatrix::add_by_halves`] does to its two;
-    /// block `(p, q)` of an element belongs to row `min(p, q)`.
+    /// consecutive `bounds`, in parallel tasks: it gets the blocks stored for `rows`, the
+    /// first of them at storage slot `first`, and must add only into those. Terms that
+    /// each task adds in a fixed order keep that order, and so their sums, on any number
+    /// of threads. Block `(p, q)` of an element belongs to row `min(p, q)`.
     pub fn add_by_parts(
         &mut self,
         pattern: &BlockPattern,
@@ -820,25 +764,11 @@ mod tests {
         }
     }
 
-    /// Either half sees its own rows' blocks at their slots, wherever the split falls.
+    /// Either part sees its own rows' blocks at their slots, wherever the split falls.
     #[test]
-    fn halves_add_into_their_own_rows_only() {
+    fn parts_add_into_their_own_rows_only() {
         let pattern = BlockPattern::from_stencils(3, [&[0u32, 1][..], &[1, 2][..]]).with_upper();
         for split in 0..5 {
-            let mut m = BlockMatrix::default();
-            m.reset(&pattern);
-            m.add_by_halves(&pattern, split, |rows, blocks, first| {
-                for row in rows {
-                    for slot in pattern.slots(row) {
-                        blocks[slot - first] += Mat3::from_diagonal(Vec3::splat((10 * row + slot) as f32));
-                    }
-                }
-            });
-            for slot in 0..pattern.columns.len() {
-                let expected = (10 * pattern.row_of(slot) + slot) as f32;
-                assert_eq!(m.blocks[slot], Mat3::from_diagonal(Vec3::splat(expected)), "split {split}, slot {slot}");
-            }
-            // The same over the upper storage of a symmetric matrix.
             let mut m = SymmetricBlockMatrix::default();
             m.reset(&pattern);
             m.add_by_parts(&pattern, &[0, split.min(3), 3], |_, rows, blocks, first| {

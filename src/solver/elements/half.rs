@@ -72,8 +72,8 @@ impl HalfBlock {
     }
 }
 
-/// A matrix of [`HalfBlock`]s over a [`BlockPattern`], every block stored, as a
-/// [`super::BlockMatrix`].
+/// A matrix of [`HalfBlock`]s over a [`BlockPattern`], every block stored (both
+/// triangles, where it has them), so that a product is a gather over rows.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct HalfBlockMatrix {
     /// One block per pattern slot.

@@ -17,7 +17,7 @@ pub mod spring;
 pub(crate) mod testing;
 
 pub use bending::{BendingFace, BendingLaw, BendingRigidity, BendingSurface, NO_HINGE};
-pub use block::{BlockMatrix, BlockPattern, ElementPositions, SymmetricBlockMatrix, VelocityJacobian};
+pub use block::{BlockPattern, ElementPositions, SymmetricBlockMatrix, VelocityJacobian};
 pub use couplings::{ConstantCouplings, WeightedCouplings};
 pub use half::{HalfBlock, HalfBlockMatrix};
 pub use membrane::{MembraneElement, MembraneMaterial};
