@@ -193,7 +193,7 @@ fn kernels(c: &mut Criterion) {
                 start_force: None,
             };
             let mut ws = IntegratorWorkspace::default();
-            ws.resize(count);
+            ws.resize(count, method);
             let (mut x, mut v) = (x.clone(), v.clone());
             group.bench_function(BenchmarkId::new(format!("integrate/{}", method.name()), &size), |b| {
                 on_pool(b, || {

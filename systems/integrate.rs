@@ -56,7 +56,9 @@ pub fn integrate_cloths(
                 .map(|t| props.constrain(t, particles.position[t.particle as usize], settings.dt)),
         );
         let coupled = solver.integrator.is_implicit() && props.has_free_bodies();
-        integrator.resize(particles.len());
+        // Only an explicit method's buffers are sized: an implicit one's start
+        // acceleration is empty, and this fills nothing.
+        integrator.resize(particles.len(), solver.integrator);
         for ((a, f), w) in integrator.start_acceleration.iter_mut().zip(&particles.force).zip(&elements.5.free_inv_mass)
         {
             *a = *f * *w;

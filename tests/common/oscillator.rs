@@ -101,10 +101,16 @@ impl ParticleSystem {
         let steps = (duration / h).round() as u32;
         for n in 0..steps {
             let t = (f64::from(n) * h) as f32;
-            ws.resize(x.len());
-            let mut a = vec![Vec3::ZERO; x.len()];
-            selvedge::solver::integrate::Dynamics::acceleration(&mut dynamics, &x, &v, t, &mut a);
-            ws.start_acceleration.copy_from_slice(&a);
+            ws.resize(x.len(), method);
+            if !method.is_implicit() {
+                selvedge::solver::integrate::Dynamics::acceleration(
+                    &mut dynamics,
+                    &x,
+                    &v,
+                    t,
+                    &mut ws.start_acceleration,
+                );
+            }
             let report = step(method, &mut dynamics, &mut [], None, &mut x, &mut v, t, h as f32, settings, &mut ws)
                 .expect("a smooth problem");
             total.accepted += report.accepted;
