@@ -19,6 +19,7 @@ use selvedge::solver::filter::Filters;
 use selvedge::solver::forces::{Air, ClothDynamics, ForceModel, ForceScratch};
 use selvedge::solver::implicit::StepSystem;
 use selvedge::solver::integrate::{Integrator, IntegratorWorkspace, MethodSettings, step};
+use selvedge::solver::multigrid::Multigrid;
 use selvedge::solver::probes::most_stretched_edge;
 
 const SIZES: [u32; 2] = [64, 256];
@@ -104,9 +105,9 @@ impl Sheet {
 /// The kernels alone on the material of the `selvedge bench` scenes (membrane μ = λ =
 /// 1000 N/m, bending 1e-5 N·m, 0.2 kg/m²): force evaluation, the per-frame probes
 /// (potential energy, largest strain, self-intersection count), derivative assembly, one
-/// symmetric block-descent sweep over the implicit-Euler system at 1/60 s, and whole
-/// steps of three integrators, each timed on a worker of rayon's pool ([`on_pool`]); and
-/// the forces and derivatives again with `law: Quadratic`.
+/// symmetric block-descent sweep and one multigrid V-cycle over the implicit-Euler system
+/// at 1/60 s, and whole steps of three integrators, each timed on a worker of rayon's
+/// pool ([`on_pool`]); and the forces and derivatives again with `law: Quadratic`.
 fn kernels(c: &mut Criterion) {
     let mut group = c.benchmark_group("kernels");
     group.sample_size(20);
@@ -165,6 +166,15 @@ fn kernels(c: &mut Criterion) {
         let mut delta = vec![Vec3::ZERO; count];
         group.bench_function(BenchmarkId::new("matrix_product", &size), |b| {
             on_pool(b, || system.multiply(pattern, black_box(&rhs), &mut delta));
+        });
+        // One V-cycle of the multigrid preconditioner on the same system (its levels
+        // built once, outside the timing): with the product above, what an iteration of
+        // the hang scenes' conjugate gradients costs.
+        let (hierarchy, system_at) = (&topology.hierarchy, StepSystem::new(pattern, &system));
+        let mut multigrid = Multigrid::default();
+        multigrid.prepare(hierarchy, system_at, &filter, &x);
+        group.bench_function(BenchmarkId::new("v_cycle", &size), |b| {
+            on_pool(b, || multigrid.apply(hierarchy, system_at, &filter, black_box(&rhs), &mut delta));
         });
         group.bench_function(BenchmarkId::new("descent_sweep", &size), |b| {
             on_pool(b, || {
