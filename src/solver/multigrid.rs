@@ -43,12 +43,13 @@
 //! filter. Every kernel is a parallel loop over rows or blocks with a
 //! fixed order inside, so the result does not depend on the number of threads.
 
-use glam::{Mat3, Vec3, Vec3A, Vec4};
+use glam::{Mat3, Mat3A, Vec3, Vec3A, Vec4};
 use rayon::prelude::*;
 
 use super::elements::block::{block_product, by_parts, times};
+use super::elements::half::row_product;
 use super::elements::spring::{outer, skew};
-use super::elements::{BlockPattern, HalfBlock, HalfBlockMatrix, SymmetricBlockMatrix, WeightedCouplings};
+use super::elements::{BlockPattern, HalfBlock, StoredBlock, SymmetricBlockMatrix, WeightedCouplings};
 use super::filter::{Filters, filtered_inverse};
 use super::implicit::StepSystem;
 use super::pipeline::pipelined;
@@ -290,8 +291,15 @@ impl Restriction {
     }
 
     /// `out = Pᵀ t`, for `P`'s `blocks` over `p`, with `buffer` for the chunks' sums.
-    fn apply(&self, p: &BlockPattern, blocks: &[HalfBlock], t: &[Vec3], buffer: &mut Vec<Vec3>, out: &mut [Vec3]) {
-        let transposed = |block: &HalfBlock, v: Vec3| Vec3::from(block.transposed_times(Vec3A::from(v)));
+    fn apply<B: StoredBlock>(
+        &self,
+        p: &BlockPattern,
+        blocks: &[B],
+        t: &[Vec3],
+        buffer: &mut Vec<Vec3>,
+        out: &mut [Vec3],
+    ) {
+        let transposed = |block: &B, v: Vec3| Vec3::from(block.transposed_times(Vec3A::from(v)));
         match self {
             Self::ByColumns { slots, rows } => {
                 out.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(c, out)| {
@@ -379,9 +387,8 @@ struct Level {
     /// axes of its points' spread, a column zeroed where turning about it hardly moves
     /// them (a line of points about itself, a single point).
     frames: Vec<Mat3>,
-    /// The filtered, smoothed prolongator `S P` from the next coarser level, rounded to
-    /// bfloat16 ([`HalfBlock`]).
-    prolongation: HalfBlockMatrix,
+    /// The filtered, smoothed prolongator `S P` from the next coarser level.
+    prolongation: Prolongation,
     /// Estimate of the dominant mode of `D⁻¹ A`, kept for the next system.
     dominant: Vec<Vec3>,
     /// The smoothing's products, then the residual after smoothing.
@@ -393,6 +400,68 @@ struct Level {
     coarse_correction: Vec<Vec3>,
     /// The restriction's chunks' sums.
     restricted: Vec<Vec3>,
+}
+
+/// Levels of at least this many rows keep their prolongator in bfloat16 ([`HalfBlock`]):
+/// the finest prolongator of the 256² hang scene, the levels' largest array, which a
+/// V-cycle reads twice. Rounded, a prolongator is another basis of the coarse space, and
+/// since the Galerkin product, the restriction and the prolongation all read the rounded
+/// one, the V-cycle stays symmetric and positive definite. Rounded, hang_256's finest
+/// prolongator took its solves 467 iterations in the first 40 frames against 463, and
+/// halved the bytes of the largest array of the levels: with every level's prolongator
+/// rounded, its heap peaked at 84.1 MB against 89.1 and its solve took 57.4 and 61.3 ms
+/// a frame against 61.4 and 66.4 (whole benches, alternating). A smaller prolongator
+/// sits in the cache, where widening its blocks costs more than their bytes save: rounded
+/// at every level, hang_64's solve took 2.32 to 2.38 ms a frame against 2.17 to 2.25, and
+/// its frame, like hang_128's, 5 % longer.
+const HALF_ROWS: usize = 32_768;
+
+/// A prolongator's blocks over its pattern: in `f32`, or in bfloat16 on levels of at
+/// least [`HALF_ROWS`] rows.
+#[derive(Debug, Clone)]
+enum Prolongation {
+    Full(Vec<Mat3>),
+    Half(Vec<HalfBlock>),
+}
+
+impl Default for Prolongation {
+    fn default() -> Self {
+        Self::Full(Vec::new())
+    }
+}
+
+impl Prolongation {
+    /// How many blocks it holds.
+    fn len(&self) -> usize {
+        match self {
+            Self::Full(blocks) => blocks.len(),
+            Self::Half(blocks) => blocks.len(),
+        }
+    }
+
+    /// Row `i` of `S P` (over `p`) times the coarse `x`.
+    #[inline]
+    fn row_product(&self, p: &BlockPattern, i: usize, x: &[Vec3]) -> Vec3 {
+        match self {
+            Self::Full(blocks) => row_product(blocks, p, i, x),
+            Self::Half(blocks) => row_product(blocks, p, i, x),
+        }
+    }
+
+    /// `out = (S P)ᵀ t` by `restriction`.
+    fn restrict(
+        &self,
+        restriction: &Restriction,
+        p: &BlockPattern,
+        t: &[Vec3],
+        buffer: &mut Vec<Vec3>,
+        out: &mut [Vec3],
+    ) {
+        match self {
+            Self::Full(blocks) => restriction.apply(p, blocks, t, buffer, out),
+            Self::Half(blocks) => restriction.apply(p, blocks, t, buffer, out),
+        }
+    }
 }
 
 /// The inverse `D⁻¹` of a level's diagonal blocks. On the finest level, per node, the
@@ -1052,8 +1121,8 @@ impl Level {
     /// The rotation blocks of `S P₀` are formed first, into `rotations`, once per node
     /// rather than once for each of the node's neighbours, which took half of the
     /// prolongator's time; its translation blocks are `S` itself ([`Rigid::translation`]).
-    /// Each group of rows is formed in `f32` ([`FORMING`]) and kept rounded to bfloat16
-    /// ([`HalfBlock`]), which the Galerkin product, restriction and prolongation all read.
+    /// On a level of [`HALF_ROWS`] rows or more, each group of rows is formed in `f32`
+    /// ([`FORMING`]) and kept rounded to bfloat16.
     fn prolongator(&mut self, a: Operator, coarsening: &Coarsening, points: Points, rotations: &mut Vec<Mat3>) {
         let Level { inverse, weight, centres, frames, prolongation, .. } = self;
         let (weight, rigid) = (*weight, Rigid { coarsening, points, centres, frames });
@@ -1081,35 +1150,54 @@ impl Level {
                 }
             });
         };
-        let pattern = &coarsening.prolongation;
-        prolongation.blocks.resize(pattern.columns.len(), HalfBlock::default());
-        pattern.fill_row_range(size, 0..pattern.rows(), &mut prolongation.blocks, &|first, columns, halves| {
-            FORMING.with_borrow_mut(|blocks| {
-                blocks.clear();
-                blocks.resize(halves.len(), Mat3::ZERO);
-                for (r, row) in blocks.chunks_mut(columns.len()).enumerate() {
-                    push(first + r, columns, row);
-                }
-                for (s, &coarse) in columns.iter().enumerate() {
-                    let pushed = [blocks[s], blocks.get(columns.len() + s).copied().unwrap_or(Mat3::ZERO)];
-                    for r in 0..size {
-                        let i = first + r;
-                        let mut smoothed = block_product(&inverse.own[i], &pushed[r]);
-                        if let Some(partner) = inverse.partner.get(i) {
-                            smoothed += block_product(partner, &pushed[1 - r]);
-                        }
-                        let own = match coarse / 2 == rigid.aggregate(i) {
-                            true => tentative(i)[coarse as usize % 2],
-                            false => Mat3::ZERO,
-                        };
-                        blocks[r * columns.len() + s] = own - weight * smoothed;
+        // The rows of `S P` in a group, given that group's rows of `A S P₀` (`pushed`
+        // into them first).
+        let form = |first: usize, columns: &[u32], blocks: &mut [Mat3]| {
+            for (r, row) in blocks.chunks_mut(columns.len()).enumerate() {
+                push(first + r, columns, row);
+            }
+            for (s, &coarse) in columns.iter().enumerate() {
+                let pushed = [blocks[s], blocks.get(columns.len() + s).copied().unwrap_or(Mat3::ZERO)];
+                for r in 0..size {
+                    let i = first + r;
+                    let mut smoothed = block_product(&inverse.own[i], &pushed[r]);
+                    if let Some(partner) = inverse.partner.get(i) {
+                        smoothed += block_product(partner, &pushed[1 - r]);
                     }
+                    let own = match coarse / 2 == rigid.aggregate(i) {
+                        true => tentative(i)[coarse as usize % 2],
+                        false => Mat3::ZERO,
+                    };
+                    blocks[r * columns.len() + s] = own - weight * smoothed;
                 }
-                for (half, block) in halves.iter_mut().zip(blocks.iter()) {
-                    *half = HalfBlock::rounded(*block);
-                }
-            });
-        });
+            }
+        };
+        let pattern = &coarsening.prolongation;
+        let (rows, count) = (pattern.rows(), pattern.columns.len());
+        match (rows >= HALF_ROWS, &mut *prolongation) {
+            (true, Prolongation::Half(_)) | (false, Prolongation::Full(_)) => {}
+            (true, kept) => *kept = Prolongation::Half(Vec::new()),
+            (false, kept) => *kept = Prolongation::Full(Vec::new()),
+        }
+        match prolongation {
+            Prolongation::Full(blocks) => {
+                blocks.resize(count, Mat3::ZERO);
+                pattern.fill_row_range(size, 0..rows, blocks, &form);
+            }
+            Prolongation::Half(halves) => {
+                halves.resize(count, HalfBlock::default());
+                pattern.fill_row_range(size, 0..rows, halves, &|first, columns, halves| {
+                    FORMING.with_borrow_mut(|blocks| {
+                        blocks.clear();
+                        blocks.resize(halves.len(), Mat3::ZERO);
+                        form(first, columns, blocks);
+                        for (half, block) in halves.iter_mut().zip(blocks.iter()) {
+                            *half = HalfBlock::rounded(*block);
+                        }
+                    });
+                });
+            }
+        }
     }
 
     /// The coarser level's matrix `(S P)ᵀ A S P`. `A S P` is formed [`PRODUCT_ROWS`] fine
@@ -1118,59 +1206,11 @@ impl Level {
     /// the chunk before is added into the coarse matrix: fine row `r` adds
     /// `(S P)_rRᵀ (A S P)_r` to each coarse row `R` of its row of `S P`, rows in order, so
     /// each coarse block sums its terms in fine-row order on any number of threads.
-    fn galerkin(
-        &mut self,
-        a: Operator,
-        coarsening: &Coarsening,
-        out: &mut SymmetricBlockMatrix,
-        buffer: &mut Vec<Mat3>,
-    ) {
-        let Coarsening { prolongation: p, product: ap, coarse, .. } = coarsening;
-        let prolongation = &self.prolongation.blocks;
-        let rows = ap.rows();
-        let chunk_rows = |chunk: usize| chunk * PRODUCT_ROWS..rows.min((chunk + 1) * PRODUCT_ROWS);
-        let chunks = rows.div_ceil(PRODUCT_ROWS);
-        let half = (0..chunks).map(|c| ap.slots_of(chunk_rows(c)).len()).max().unwrap_or(0);
-        let compute = |chunk: usize, blocks: &mut [Mat3]| {
-            let rows = chunk_rows(chunk);
-            let blocks = &mut blocks[..ap.slots_of(rows.clone()).len()];
-            blocks.fill(Mat3::ZERO);
-            ap.fill_row_range(1, rows, blocks, &|i, columns, blocks| {
-                a.for_row(i, |node, block| {
-                    let mut at = 0;
-                    for s in p.slots(node as usize) {
-                        add_at(columns, blocks, &mut at, p.columns[s], prolongation[s].after(&block));
-                    }
-                });
-            });
-        };
-        out.reset(coarse);
-        pipelined(chunks, buffer, half, compute, |chunk, blocks| {
-            let rows = chunk_rows(chunk);
-            let first = ap.slots_of(rows.clone()).start;
-            // Split at the middle fine row's first coarse node: near fine rows restrict to
-            // near coarse rows, so the halves share the additions.
-            let middle = (rows.start + rows.end) / 2;
-            let split = p.row(middle).first().map_or(0, |&node| (node as usize).min(coarse.rows()));
-            out.add_by_parts(coarse, &[0, split, coarse.rows()], |_, coarse_rows, coarse_blocks, coarse_first| {
-                for r in rows.clone() {
-                    let slots = ap.slots(r);
-                    let (products, product_columns) = (&blocks[slots.start - first..slots.end - first], ap.row(r));
-                    for s in p.slots(r).filter(|&s| coarse_rows.contains(&(p.columns[s] as usize))) {
-                        let (row, transposed) = (p.columns[s], Mat3::from(prolongation[s].get().transpose()));
-                        let stored = coarse.symmetric_row(row as usize);
-                        let row_blocks =
-                            &mut coarse_blocks[stored.storage.start - coarse_first..stored.storage.end - coarse_first];
-                        // The row's blocks from its diagonal on: those below are mirrors.
-                        let from = product_columns.partition_point(|&column| column < row);
-                        let mut at = 0;
-                        for (&column, product) in product_columns[from..].iter().zip(&products[from..]) {
-                            add_at(stored.above, row_blocks, &mut at, column, block_product(&transposed, product));
-                        }
-                    }
-                }
-            });
-        });
+    fn galerkin(&self, a: Operator, coarsening: &Coarsening, out: &mut SymmetricBlockMatrix, buffer: &mut Vec<Mat3>) {
+        match &self.prolongation {
+            Prolongation::Full(blocks) => galerkin_over(a, coarsening, blocks, out, buffer),
+            Prolongation::Half(blocks) => galerkin_over(a, coarsening, blocks, out, buffer),
+        }
     }
 
     /// [`SMOOTHING_SWEEPS`] Chebyshev steps on `A z = r` with `D⁻¹` as preconditioner;
@@ -1198,6 +1238,67 @@ impl Level {
             }
         }
     }
+}
+
+/// [`Level::galerkin`] over the prolongator's `blocks`.
+fn galerkin_over<B: StoredBlock>(
+    a: Operator,
+    coarsening: &Coarsening,
+    prolongation: &[B],
+    out: &mut SymmetricBlockMatrix,
+    buffer: &mut Vec<Mat3>,
+) {
+    let Coarsening { prolongation: p, product: ap, coarse, .. } = coarsening;
+    let rows = ap.rows();
+    let chunk_rows = |chunk: usize| chunk * PRODUCT_ROWS..rows.min((chunk + 1) * PRODUCT_ROWS);
+    let chunks = rows.div_ceil(PRODUCT_ROWS);
+    let half = (0..chunks).map(|c| ap.slots_of(chunk_rows(c)).len()).max().unwrap_or(0);
+    let compute = |chunk: usize, blocks: &mut [Mat3]| {
+        let rows = chunk_rows(chunk);
+        let blocks = &mut blocks[..ap.slots_of(rows.clone()).len()];
+        blocks.fill(Mat3::ZERO);
+        ap.fill_row_range(1, rows, blocks, &|i, columns, blocks| {
+            a.for_row(i, |node, block| {
+                let mut at = 0;
+                for s in p.slots(node as usize) {
+                    add_at(
+                        columns,
+                        blocks,
+                        &mut at,
+                        p.columns[s],
+                        Mat3::from(Mat3A::from(block) * prolongation[s].get()),
+                    );
+                }
+            });
+        });
+    };
+    out.reset(coarse);
+    pipelined(chunks, buffer, half, compute, |chunk, blocks| {
+        let rows = chunk_rows(chunk);
+        let first = ap.slots_of(rows.clone()).start;
+        // Split at the middle fine row's first coarse node: near fine rows restrict to
+        // near coarse rows, so the halves share the additions.
+        let middle = (rows.start + rows.end) / 2;
+        let split = p.row(middle).first().map_or(0, |&node| (node as usize).min(coarse.rows()));
+        out.add_by_parts(coarse, &[0, split, coarse.rows()], |_, coarse_rows, coarse_blocks, coarse_first| {
+            for r in rows.clone() {
+                let slots = ap.slots(r);
+                let (products, product_columns) = (&blocks[slots.start - first..slots.end - first], ap.row(r));
+                for s in p.slots(r).filter(|&s| coarse_rows.contains(&(p.columns[s] as usize))) {
+                    let (row, transposed) = (p.columns[s], Mat3::from(prolongation[s].get().transpose()));
+                    let stored = coarse.symmetric_row(row as usize);
+                    let row_blocks =
+                        &mut coarse_blocks[stored.storage.start - coarse_first..stored.storage.end - coarse_first];
+                    // The row's blocks from its diagonal on: those below are mirrors.
+                    let from = product_columns.partition_point(|&column| column < row);
+                    let mut at = 0;
+                    for (&column, product) in product_columns[from..].iter().zip(&products[from..]) {
+                        add_at(stored.above, row_blocks, &mut at, column, block_product(&transposed, product));
+                    }
+                }
+            }
+        });
+    });
 }
 
 /// One Chebyshev step's update of the correction `z` and the last update `d`, from the
@@ -1284,7 +1385,7 @@ impl Multigrid {
                 && levels
                     .iter()
                     .zip(&hierarchy.coarsenings)
-                    .all(|(level, coarsening)| level.prolongation.blocks.len() == coarsening.prolongation.columns.len())
+                    .all(|(level, coarsening)| level.prolongation.len() == coarsening.prolongation.columns.len())
                 && levels.first().is_none_or(|level| level.inverse.own.len() == system.pattern.rows())
         };
         let built = built_for(&self.levels);
@@ -1399,7 +1500,7 @@ fn cycle(
     a.residual(r, z, &mut level.scratch);
     // r_c = (S P)ᵀ t, with t = S (r − A z).
     let Level { scratch, prolongation, coarse_residual, restricted, .. } = level;
-    coarsening.restriction.apply(&coarsening.prolongation, &prolongation.blocks, scratch, restricted, coarse_residual);
+    prolongation.restrict(&coarsening.restriction, &coarsening.prolongation, scratch, restricted, coarse_residual);
     let below = coarse_operator(&coarsening.coarse, &matrices[0]);
     cycle(
         deeper,

@@ -1,20 +1,11 @@
 //! 3×3 blocks kept in bfloat16 (the upper half of an `f32`: its sign, exponent and 7
 //! bits of mantissa), for matrices that need their span rather than their digits: the
-//! multigrid's prolongators ([`crate::solver::multigrid`]).
+//! multigrid's prolongators on its large levels ([`crate::solver::multigrid`], which
+//! says why and what it measured), and [`StoredBlock`], over which a kernel reads either
+//! kind of block.
 //!
-//! A prolongator is a basis of the coarse space. Rounded, each entry within 2⁻⁸ of
-//! itself, it is another basis, and since the Galerkin product, the restriction and the
-//! prolongation all use the rounded one, the V-cycle stays symmetric and positive
-//! definite. What the rounding adds to a coarse motion is rough, which the smoother
-//! damps: over the hang bench scenes' 40 first frames the solves took 299, 334 and 470
-//! iterations at 64², 128² and 256² against 301, 334 and 463 unrounded.
-//!
-//! The finest prolongator is the largest array of the levels (3.75 blocks a particle on
-//! the 256² sheet) and a V-cycle reads it twice, restricting and prolongating. Halved,
-//! hang_256's heap peaked at 84.1 MB against 89.1 over 20 frames, and its solve took
-//! 57.4 and 61.3 ms a frame against 61.4 and 66.4 (whole benches, alternating). Widening
-//! is a shift, done in SIMD registers: widened entry by entry into a `Mat3` first, the
-//! Galerkin product took twice as long.
+//! A rounded entry is within 2⁻⁸ of itself. Widening is a shift, done in SIMD registers:
+//! widened entry by entry into a `Mat3` first, the Galerkin product took twice as long.
 
 use glam::{Mat3, Mat3A, Vec3, Vec3A};
 
@@ -37,59 +28,59 @@ impl HalfBlock {
         }))
     }
 
-    /// The block, exactly as stored, widened in SIMD registers.
-    #[inline]
-    pub fn get(&self) -> Mat3A {
-        let [x, y, z] = self.columns();
-        Mat3A::from_cols(x, y, z)
-    }
-
-    /// `a b`, as [`super::block::block_product`] does for two `f32` blocks.
-    #[inline]
-    pub fn after(&self, a: &Mat3) -> Mat3 {
-        Mat3::from(Mat3A::from(*a) * self.get())
-    }
-
     /// The block's columns, widened in SIMD registers.
     #[inline]
-    pub fn columns(&self) -> [Vec3A; 3] {
+    fn columns(&self) -> [Vec3A; 3] {
         let e = self.0.map(|half| f32::from_bits(u32::from(half) << 16));
         [Vec3A::from_slice(&e[0..3]), Vec3A::from_slice(&e[3..6]), Vec3A::from_slice(&e[6..9])]
     }
+}
 
-    /// `b v`, as [`super::block::times`] does for an `f32` block.
+/// A 3×3 block as a matrix may keep it, in `f32` ([`Mat3`]) or in bfloat16
+/// ([`HalfBlock`]), read widened into SIMD registers: kernels generic over it compile a
+/// loop for each.
+pub trait StoredBlock: Copy + Send + Sync {
+    /// The block, exactly as stored.
+    fn get(&self) -> Mat3A;
+
+    /// `b v`, as [`super::block::times`] does (the same sums, so the same bits).
     #[inline]
-    pub fn times(&self, v: Vec3A) -> Vec3A {
-        let [x, y, z] = self.columns();
-        x * v.x + y * v.y + z * v.z
+    fn times(&self, v: Vec3A) -> Vec3A {
+        let b = self.get();
+        b.x_axis * v.x + b.y_axis * v.y + b.z_axis * v.z
     }
 
-    /// `bᵀ v`, as [`super::block::transposed_times`] does for an `f32` block.
+    /// `bᵀ v`, as [`super::block::transposed_times`] does.
     #[inline]
-    pub fn transposed_times(&self, v: Vec3A) -> Vec3A {
+    fn transposed_times(&self, v: Vec3A) -> Vec3A {
         let t = self.get().transpose();
         t.x_axis * v.x + t.y_axis * v.y + t.z_axis * v.z
     }
 }
 
-/// A matrix of [`HalfBlock`]s over a [`BlockPattern`], every block stored (both
-/// triangles, where it has them), so that a product is a gather over rows.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct HalfBlockMatrix {
-    /// One block per pattern slot.
-    pub blocks: Vec<HalfBlock>,
+impl StoredBlock for Mat3 {
+    #[inline]
+    fn get(&self) -> Mat3A {
+        Mat3A::from(*self)
+    }
 }
 
-impl HalfBlockMatrix {
-    /// Row `i` of the matrix times `x`, blocks in column order.
+impl StoredBlock for HalfBlock {
     #[inline]
-    pub fn row_product(&self, pattern: &BlockPattern, i: usize, x: &[Vec3]) -> Vec3 {
-        let mut sum = Vec3A::ZERO;
-        for k in pattern.slots(i) {
-            sum += self.blocks[k].times(Vec3A::from(x[pattern.columns[k] as usize]));
-        }
-        Vec3::from(sum)
+    fn get(&self) -> Mat3A {
+        let [x, y, z] = self.columns();
+        Mat3A::from_cols(x, y, z)
     }
+}
+
+/// Row `i` of the matrix of `blocks` over `pattern` times `x`, blocks in column order.
+#[inline]
+pub fn row_product<B: StoredBlock>(blocks: &[B], pattern: &BlockPattern, i: usize, x: &[Vec3]) -> Vec3 {
+    let mut sum = Vec3A::ZERO;
+    for k in pattern.slots(i) {
+        sum += blocks[k].times(Vec3A::from(x[pattern.columns[k] as usize]));
+    }
+    Vec3::from(sum)
 }
 
 #[cfg(test)]
@@ -105,7 +96,7 @@ mod tests {
         let mut entries = [0.0f32; 9];
         entries[..2].copy_from_slice(&ties);
         entries[2..].copy_from_slice(&exact);
-        let back = Mat3::from(HalfBlock::rounded(Mat3::from_cols_array(&entries)).get()).to_cols_array();
+        let back = Mat3::from(StoredBlock::get(&HalfBlock::rounded(Mat3::from_cols_array(&entries)))).to_cols_array();
         assert_eq!(back[..2], [1.0, 1.0 + 2f32.powi(-6)]);
         assert_eq!(back[2..].iter().map(|v| v.to_bits()).collect::<Vec<_>>(), exact.map(f32::to_bits));
         let special = HalfBlock::rounded(Mat3::from_cols_array(&[

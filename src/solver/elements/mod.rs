@@ -19,7 +19,7 @@ pub(crate) mod testing;
 pub use bending::{BendingFace, BendingLaw, BendingRigidity, BendingSurface, NO_HINGE};
 pub use block::{BlockPattern, ElementPositions, SymmetricBlockMatrix, VelocityJacobian};
 pub use couplings::{ConstantCouplings, WeightedCouplings};
-pub use half::{HalfBlock, HalfBlockMatrix};
+pub use half::{HalfBlock, StoredBlock};
 pub use membrane::{MembraneElement, MembraneMaterial};
 pub use quadratic::QuadraticBending;
 pub use spring::SpringElement;
