@@ -2,7 +2,8 @@
 //! a cloth: one block row per particle, one block per pair of particles that share an
 //! element. The cloth's derivatives and its implicit system are symmetric and keep only
 //! the blocks on and above the diagonal ([`SymmetricBlockMatrix`]), as do the
-//! multigrid's levels; its prolongators keep every block, in bfloat16 ([`super::half`]).
+//! multigrid's levels; its prolongators keep every block, on large levels in bfloat16
+//! ([`super::half`]).
 
 use glam::{Mat3, Mat3A, Vec3, Vec3A};
 use rayon::prelude::*;
