@@ -78,8 +78,9 @@ pub fn collide_with_bodies(
         for (sum, load) in total.iter_mut().zip(output.loads.iter()) {
             sum.add(load);
         }
-        let surface = ClothSurface {
-            edges: &topology.edges,
+        // Formed only for a collider with features: the edges are found at the first ask.
+        let surface = || ClothSurface {
+            edges: topology.edges(&triangles.indices),
             triangles: &triangles.indices,
             free_inv_mass: &topology.free_inv_mass,
             start: &workspace.step_start,
@@ -89,7 +90,7 @@ pub fn collide_with_bodies(
                 continue;
             };
             let (pushes, load) =
-                features.resolve(&body.state, body.thickness, settings.dt, surface, position, velocity, scratch);
+                features.resolve(&body.state, body.thickness, settings.dt, surface(), position, velocity, scratch);
             stats.0.add(&pushes);
             sum.add(&load);
         }
@@ -155,7 +156,7 @@ pub fn collide_cloths(
             mesh.triangles.extend(triangles.indices.iter().map(|t| t.map(|k| k + offset)));
             // Each cloth's edges are sorted and numbered above the last cloth's, so the
             // whole list is sorted too.
-            mesh.edges.extend(topology.edges.iter().map(|e| e.map(|k| k + offset)));
+            mesh.edges.extend(topology.edges(&triangles.indices).iter().map(|e| e.map(|k| k + offset)));
             mesh.half_gap.extend(std::iter::repeat_n(0.5 * collision.separation, particles.len()));
             mesh.friction.extend(std::iter::repeat_n(collision.friction, particles.len()));
             mesh.layer.extend(std::iter::repeat_n(collision.layer, particles.len()));

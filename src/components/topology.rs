@@ -1,5 +1,7 @@
 //! Caches derived from a cloth's structure, and per-cloth scratch space.
 
+use std::sync::OnceLock;
+
 use bevy_ecs::prelude::*;
 use glam::Vec3;
 
@@ -77,8 +79,11 @@ pub struct ClothTopology {
     pub particle_springs: Csr,
     /// Triangles touching each particle.
     pub particle_triangles: Csr,
-    /// Edges of the triangles, each once, smaller particle first, sorted.
-    pub edges: Vec<[u32; 2]>,
+    /// Edges of the triangles, each once, smaller particle first, sorted: found when
+    /// contact first asks for them ([`ClothTopology::edges`]), since only contact reads
+    /// them: a cloth that touches nothing (the hang bench scenes) kept 24 bytes a particle
+    /// for nothing.
+    edges: OnceLock<Vec<[u32; 2]>>,
     /// Hinge corners `4 h + c` at each particle; empty where the bending is quadratic,
     /// whose forces are rows of its Jacobian (72 bytes a particle on a regular sheet,
     /// with `hinge_faces`).
@@ -155,7 +160,7 @@ impl ClothTopology {
         Self {
             particle_springs: Csr::from_items(count, &springs.pairs),
             particle_triangles: Csr::from_items(count, &triangles.indices),
-            edges: ContactMesh::edges_of(&triangles.indices),
+            edges: OnceLock::new(),
             particle_hinges: match by_angles {
                 true => Csr::from_corners(count, &hinges.vertices),
                 false => Csr::default(),
@@ -179,6 +184,12 @@ impl ClothTopology {
             free_inv_mass,
             builds,
         }
+    }
+
+    /// The edges of `triangles`, the triangles this topology was built from, each once,
+    /// smaller particle first, sorted; found at the first call.
+    pub fn edges(&self, triangles: &[[u32; 3]]) -> &[[u32; 2]] {
+        self.edges.get_or_init(|| ContactMesh::edges_of(triangles))
     }
 }
 

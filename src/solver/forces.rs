@@ -718,7 +718,8 @@ impl LinearDynamics for ClothDynamics<'_> {
     }
 
     fn contact_surface(&self) -> Option<Surface<'_>> {
-        self.self_collision.then_some(Surface { triangles: self.model.triangles, edges: &self.model.topology.edges })
+        let (triangles, topology) = (self.model.triangles, self.model.topology);
+        self.self_collision.then(|| Surface { triangles, edges: topology.edges(triangles) })
     }
 
     fn contact_bodies(&self) -> &[ContactBody] {
