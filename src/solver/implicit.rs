@@ -164,7 +164,8 @@ pub struct ImplicitWorkspace {
     /// Per particle, the directions its Δv may take: identity (free), zero (pinned) or a
     /// projection off a contact normal.
     filter: Filters,
-    /// Per particle, the part of Δv the constraints prescribe.
+    /// Per particle, the part of Δv the constraints prescribe; empty, meaning zero, where
+    /// there are no bodies to touch ([`prescribe`]).
     prescribed: Vec<Vec3>,
     /// Block descent's buffers.
     descent: DescentWorkspace,
@@ -618,7 +619,11 @@ fn add_constraint_impulses(
 }
 
 /// Sets `prescribed` to the part of each particle's Δv that the `constraints` fix: the
-/// change to the constraint's velocity along its normal, or whole where it sticks.
+/// change to the constraint's velocity along its normal, or whole where it sticks. Left
+/// empty, all zero, where the system has no bodies to touch and no constraints: 12 bytes
+/// a particle of zeros on a cloth that touches nothing (the hangs). Sized wherever there
+/// are bodies, touched or not, so that a warm step does not allocate it when contact
+/// begins.
 fn prescribe(
     dynamics: &impl LinearDynamics,
     constraints: &[VelocityConstraint],
@@ -626,6 +631,9 @@ fn prescribe(
     prescribed: &mut Vec<Vec3>,
 ) {
     prescribed.clear();
+    if constraints.is_empty() && dynamics.contact_bodies().is_empty() {
+        return;
+    }
     prescribed.resize(v.len(), Vec3::ZERO);
     for c in constraints {
         let i = c.particle as usize;
@@ -688,6 +696,7 @@ fn solve(
     // 42 711 in sphere_64's first 60 frames with block Jacobi. Within a step, a solve for
     // other body velocities starts from the last solution of the same system.
     match start {
+        Start::Prescribed if ws.prescribed.is_empty() => ws.delta.fill(Vec3::ZERO),
         Start::Prescribed => ws.delta.copy_from_slice(&ws.prescribed),
         Start::Zero => ws.delta.fill(Vec3::ZERO),
         Start::Given => {}
