@@ -150,8 +150,10 @@ pub struct ImplicitWorkspace {
     dv: Vec<Vec3>,
     delta: Vec<Vec3>,
     residual: Vec<Vec3>,
-    preconditioned: Vec<Vec3>,
     direction: Vec<Vec3>,
+    /// The conjugate gradients' `A d`, then, once `r` is updated from it, the
+    /// preconditioned residual `M⁻¹ r`: the one dies where the other is formed, so they
+    /// share a buffer (12 bytes a particle).
     product: Vec<Vec3>,
     x: Vec<Vec3>,
     v: Vec<Vec3>,
@@ -309,9 +311,7 @@ pub fn implicit_step(
     ws: &mut ImplicitWorkspace,
 ) -> StepReport {
     let n = x.len();
-    for buffer in
-        [&mut ws.rhs, &mut ws.delta, &mut ws.residual, &mut ws.preconditioned, &mut ws.direction, &mut ws.product]
-    {
+    for buffer in [&mut ws.rhs, &mut ws.delta, &mut ws.residual, &mut ws.direction, &mut ws.product] {
         buffer.resize(n, Vec3::ZERO);
     }
     // The start force and Δv apart from the last solution only for Newton iterations, and
@@ -423,17 +423,17 @@ pub fn implicit_step(
         // The damping change over the step, D Δv, which the end-of-step damping weighs by
         // 1 rather than θ: D = ∂f/∂v − αM + βK.
         ws.dfdv.multiply(dynamics.pattern(), &ws.dv, &mut ws.residual);
-        stiffness.multiply(&ws.dv, &mut ws.preconditioned);
+        stiffness.multiply(&ws.dv, &mut ws.direction);
         let springs = springs_of(settings, dynamics);
         contact_springs::add_forces(springs, &ws.x, &ws.v, &mut ws.rhs);
         contact_springs::add_product(springs, STIFFNESS, Blocks::All, &ws.v, &mut ws.product);
         contact_springs::add_product(springs, DAMPING, Blocks::All, &ws.dv, &mut ws.residual);
-        contact_springs::add_product(springs, STIFFNESS, Blocks::All, &ws.dv, &mut ws.preconditioned);
+        contact_springs::add_product(springs, STIFFNESS, Blocks::All, &ws.dv, &mut ws.direction);
         // −R = h((1−θ)F₀ + θF₁ + (1−θ) D Δv) − M Δv, with F₁ = f₁ − αMv₁ + βKv₁.
         for i in 0..n {
             let mass = dynamics.mass(i);
             let end_force = ws.rhs[i] - alpha * mass * ws.v[i] + beta * ws.product[i];
-            let damping_change = ws.residual[i] - alpha * mass * ws.dv[i] + beta * ws.preconditioned[i];
+            let damping_change = ws.residual[i] - alpha * mass * ws.dv[i] + beta * ws.direction[i];
             ws.rhs[i] =
                 h * ((1.0 - theta) * (ws.start_force[i] + damping_change) + theta * end_force) - mass * ws.dv[i];
         }
@@ -531,7 +531,7 @@ fn add_springs(
     let weights = Weights { stiffness: sign * ws.spring_weights.stiffness, drag: sign * ws.spring_weights.drag };
     contact_springs::add_diagonal(springs, weights, pattern, &mut ws.system);
     ws.prepared = false;
-    let (force, stiffness) = (&mut ws.residual, &mut ws.preconditioned);
+    let (force, stiffness) = (&mut ws.residual, &mut ws.direction);
     force.fill(Vec3::ZERO);
     stiffness.fill(Vec3::ZERO);
     contact_springs::add_forces(springs, x, v, force);
@@ -801,7 +801,6 @@ fn conjugate_gradient(
         rhs,
         delta,
         residual,
-        preconditioned,
         direction,
         product,
         preconditioner,
@@ -852,8 +851,8 @@ fn conjugate_gradient(
         *r = filter.apply(i, rhs[i] - q);
         f64::from(r.length_squared())
     });
-    let mut rz = precondition(multigrid, residual, preconditioned, partials);
-    direction.copy_from_slice(preconditioned);
+    let mut rz = precondition(multigrid, residual, product, partials);
+    direction.copy_from_slice(product);
     rhs.par_chunks(C)
         .enumerate()
         .map(|(c, b)| (0..b.len()).map(|k| f64::from(filter.apply(c * C + k, b[k]).length_squared())).sum())
@@ -889,10 +888,11 @@ fn conjugate_gradient(
             })
             .collect_into_vec(partials);
         rr = total(partials);
-        let next = precondition(multigrid, residual, preconditioned, partials);
+        // z = M⁻¹ r, into the buffer of q, which is spent.
+        let next = precondition(multigrid, residual, product, partials);
         let ratio = (next / rz) as f32;
         rz = next;
-        direction.par_iter_mut().zip(preconditioned.par_iter()).with_min_len(PARALLEL_MIN_LEN).for_each(|(d, z)| {
+        direction.par_iter_mut().zip(product.par_iter()).with_min_len(PARALLEL_MIN_LEN).for_each(|(d, z)| {
             *d = *z + ratio * *d;
         });
     }
