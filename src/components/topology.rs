@@ -77,8 +77,10 @@ impl Csr {
 pub struct ClothTopology {
     /// Springs touching each particle.
     pub particle_springs: Csr,
-    /// Triangles touching each particle.
-    pub particle_triangles: Csr,
+    /// Triangles touching each particle, found when wind first asks for them
+    /// ([`ClothTopology::particle_triangles`]): only wind reads them, and a cloth out of the
+    /// wind (every bench scene) kept 28 bytes a particle for nothing.
+    particle_triangles: OnceLock<Csr>,
     /// Edges of the triangles, each once, smaller particle first, sorted: found when
     /// contact first asks for them ([`ClothTopology::edges`]), since only contact reads
     /// them: a cloth that touches nothing (the hang bench scenes) kept 24 bytes a particle
@@ -159,7 +161,7 @@ impl ClothTopology {
         }
         Self {
             particle_springs: Csr::from_items(count, &springs.pairs),
-            particle_triangles: Csr::from_items(count, &triangles.indices),
+            particle_triangles: OnceLock::new(),
             edges: OnceLock::new(),
             particle_hinges: match by_angles {
                 true => Csr::from_corners(count, &hinges.vertices),
@@ -184,6 +186,12 @@ impl ClothTopology {
             free_inv_mass,
             builds,
         }
+    }
+
+    /// The triangles of `triangles`, those this topology was built from, that touch each
+    /// particle; found at the first call.
+    pub fn particle_triangles(&self, triangles: &[[u32; 3]]) -> &Csr {
+        self.particle_triangles.get_or_init(|| Csr::from_items(self.free_inv_mass.len(), triangles))
     }
 
     /// The edges of `triangles`, the triangles this topology was built from, each once,

@@ -413,7 +413,7 @@ impl ForceModel<'_> {
     /// Adds the wind's force on particle `i` to its `total`, triangle by triangle.
     fn add_wind(&self, i: usize, total: &mut Vec3, elements: &impl ElementForces) {
         if self.air.wind_drag > 0.0 {
-            for &t in self.topology.particle_triangles.row(i) {
+            for &t in self.topology.particle_triangles(self.triangles).row(i) {
                 *total += elements.wind(t as usize);
             }
         }
