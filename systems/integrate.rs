@@ -126,8 +126,12 @@ pub fn integrate_cloths(
         }
         particles.position = x;
         particles.velocity = v;
+        // The support is read only by the contact with bodies: none, none kept (12 bytes a
+        // particle).
         support.clear();
-        support.resize(particles.len(), Vec3::ZERO);
+        if !colliders.is_empty() {
+            support.resize(particles.len(), Vec3::ZERO);
+        }
         if solver.integrator.is_implicit() {
             for (c, impulse) in constraints.iter().zip(&integrator.implicit.constraint_impulses) {
                 support[c.particle as usize] += *impulse;
