@@ -4,14 +4,16 @@
 use glam::{Mat3, Vec3, Vec3A};
 use rayon::prelude::*;
 
+use super::columns::RowColumns;
 use crate::solver::PARALLEL_MIN_LEN;
 use crate::solver::multigrid::scalar_lump;
 
 /// Couplings of a cloth's particles outside its block pattern that are a multiple of the
 /// identity and constant: the quadratic bending's across an edge, whose Jacobian there is
-/// `s I`. Kept as scalars, 8 bytes where a block of ∂f/∂x and of the system took 36 (a
-/// third of a regular sheet's blocks), and products over them take 3 operations where a
-/// block took 18; found once per topology. The system's pattern is then the multigrid's
+/// `s I`. Kept as scalars, 6 bytes where their columns fit 16-bit offsets (8 where not)
+/// where a block of ∂f/∂x and of the system took 36 (a third of a regular sheet's
+/// blocks), and products over them take 3 operations where a block took 18; found once
+/// per topology. The system's pattern is then the multigrid's
 /// finest level's, and what its lumping would move onto the diagonal from them is known
 /// ahead (`lumps`).
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -20,13 +22,9 @@ pub struct ConstantCouplings {
     /// `offsets[i + 1]`, columns ascending, and both directions of a pair with the same
     /// scale.
     offsets: Vec<u32>,
-    /// The columns as offsets from their row, `j − i`, where every one fits 16 bits (the
-    /// cloth's ordering keeps its couplings near the diagonal: on the 256² hang scene
-    /// within 2 × 256 + 2 rows); else empty. Two bytes a coupling instead of four, 24
-    /// bytes a particle of a regular sheet (11.9 couplings a row).
-    near: Vec<i16>,
-    /// The columns, where some offset does not fit `near`; else empty.
-    wide: Vec<u32>,
+    /// The columns, kept as offsets from their row where they fit (11.9 a row of a
+    /// regular sheet, 24 bytes a particle less than whole indices).
+    columns: RowColumns,
     scales: Vec<f32>,
     /// Per particle, what the multigrid's lumping moves onto its diagonal from the
     /// system's blocks `−w s I` per unit stiffness weight `w`, as a multiple of `I`
@@ -64,22 +62,8 @@ impl ConstantCouplings {
                 *at += 1;
             }
         }
-        let fits = (0..rows).all(|r| {
-            let range = offsets[r] as usize..offsets[r + 1] as usize;
-            columns[range].iter().all(|&c| i16::try_from(i64::from(c) - r as i64).is_ok())
-        });
-        let (near, wide) = match fits {
-            true => {
-                let mut near = Vec::with_capacity(total);
-                for r in 0..rows {
-                    let range = offsets[r] as usize..offsets[r + 1] as usize;
-                    near.extend(columns[range].iter().map(|&c| (i64::from(c) - r as i64) as i16));
-                }
-                (near, Vec::new())
-            }
-            false => (Vec::new(), columns),
-        };
-        let mut couplings = Self { offsets, near, wide, scales, lumps: Vec::new() };
+        let columns = RowColumns::new(&offsets, columns);
+        let mut couplings = Self { offsets, columns, scales, lumps: Vec::new() };
         couplings.lumps = (0..rows)
             .into_par_iter()
             .with_min_len(PARALLEL_MIN_LEN)
@@ -91,11 +75,7 @@ impl ConstantCouplings {
     /// Particle `i`'s couplings, `(j, s)`, columns ascending.
     pub fn row(&self, i: usize) -> impl Iterator<Item = (u32, f32)> + '_ {
         let range = self.offsets[i] as usize..self.offsets[i + 1] as usize;
-        // One of the two is empty.
-        let near =
-            self.near.get(range.clone()).unwrap_or_default().iter().map(move |&d| (i as i64 + i64::from(d)) as u32);
-        let wide = self.wide.get(range.clone()).unwrap_or_default().iter().copied();
-        near.chain(wide).zip(self.scales[range].iter().copied())
+        self.columns.row(i, range.clone()).zip(self.scales[range].iter().copied())
     }
 
     /// Whether these are couplings of `rows` particles.
@@ -160,10 +140,10 @@ mod tests {
         let n = 40_000;
         let near = [(0, 2, 0.5), (2, 5, -1.5), (1, 32_767, 2.0)];
         let (couplings, read) = rows_of(n, &near);
-        assert!(couplings.wide.is_empty() && couplings.near.len() == 6, "kept as offsets");
+        assert!(couplings.columns.as_offsets(), "kept as offsets");
         let far = [(0, 2, 0.5), (2, 5, -1.5), (1, 39_999, 2.0)];
         let (whole, far_read) = rows_of(n, &far);
-        assert!(whole.near.is_empty() && whole.wide.len() == 6, "kept whole");
+        assert!(!whole.columns.as_offsets(), "kept whole");
         for (pairs, read) in [(&near, &read), (&far, &far_read)] {
             let mut expected = vec![Vec::new(); n];
             for &(i, j, s) in pairs {

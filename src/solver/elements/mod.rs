@@ -5,6 +5,7 @@
 
 pub mod bending;
 pub mod block;
+pub mod columns;
 pub mod couplings;
 pub mod dual;
 pub mod half;

@@ -10,6 +10,7 @@ use glam::Vec3;
 
 use super::bending::BendingSurface;
 use super::block::upper_pairs;
+use super::columns::RowColumns;
 use crate::solver::reduce;
 
 /// The constant Jacobian of a cloth's quadratic bending: `s_ii` on the diagonal and `s_ij`
@@ -33,7 +34,9 @@ pub struct QuadraticBending {
     /// that share a face is there, even where its scales cancel: the pairs are also the
     /// couplings the cloth's pattern and ordering must know.
     offsets: Vec<u32>,
-    columns: Vec<u32>,
+    /// Kept as offsets from their row where they fit: 9.4 a particle of a regular sheet,
+    /// 19 bytes a particle less than whole indices.
+    columns: RowColumns,
     scales: Vec<f32>,
 }
 
@@ -70,7 +73,8 @@ impl QuadraticBending {
         for r in 0..particles {
             offsets[r + 1] += offsets[r];
         }
-        let (columns, scales) = (pairs.iter().map(|p| p.1).collect(), pairs.iter().map(|p| p.2).collect());
+        let scales = pairs.iter().map(|p| p.2).collect();
+        let columns = RowColumns::new(&offsets, pairs.iter().map(|p| p.1).collect());
         let mut bending =
             Self { warp, hinges: surface.hinges.len(), rest_energy: 0.0, diagonal, offsets, columns, scales };
         bending.rest_energy = bending.stored(rest);
@@ -101,7 +105,7 @@ impl QuadraticBending {
     pub fn pairs(&self) -> impl Iterator<Item = (u32, u32, f32)> + '_ {
         (0..self.diagonal.len()).flat_map(move |i| {
             let range = self.offsets[i] as usize..self.offsets[i + 1] as usize;
-            self.columns[range.clone()].iter().zip(&self.scales[range]).map(move |(&j, &s)| (i as u32, j, s))
+            self.columns.row(i, range.clone()).zip(&self.scales[range]).map(move |(j, &s)| (i as u32, j, s))
         })
     }
 
@@ -122,10 +126,10 @@ impl QuadraticBending {
         0.5 * reduce::sum(self.diagonal.len(), |i| {
             let range = self.offsets[i] as usize..self.offsets[i + 1] as usize;
             let xi = x[i].as_dvec3();
-            self.columns[range.clone()]
-                .iter()
+            self.columns
+                .row(i, range.clone())
                 .zip(&self.scales[range])
-                .map(|(&j, &s)| f64::from(s) * (xi - x[j as usize].as_dvec3()).length_squared())
+                .map(|(j, &s)| f64::from(s) * (xi - x[j as usize].as_dvec3()).length_squared())
                 .sum()
         })
     }
