@@ -219,13 +219,10 @@ pub fn limited_edges(
 /// Membrane triangles over a surface at rest positions `x`, warp along `warp`.
 /// Degenerate triangles (which builders refuse before this) are skipped.
 pub fn build_membranes(x: &[Vec3], triangles: &[[u32; 3]], membrane: MembraneDesc, warp: Vec3) -> MembraneTriangles {
-    let mut membranes = MembraneTriangles { material: membrane.material(), ..MembraneTriangles::default() };
-    membranes.indices.reserve_exact(triangles.len());
-    membranes.elements.reserve_exact(triangles.len());
+    let mut membranes = MembraneTriangles::with_capacity(membrane.material(), triangles.len());
     for tri in triangles {
         if let Some(element) = MembraneElement::from_rest(tri.map(|v| x[v as usize]), warp) {
-            membranes.indices.push(*tri);
-            membranes.elements.push(element);
+            membranes.push(*tri, element);
         }
     }
     membranes

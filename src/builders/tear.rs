@@ -4,7 +4,7 @@ use glam::Vec3;
 
 use super::surface::build_bending;
 use crate::components::{
-    BendingDesc, BendingHinges, BendingLawDesc, MembraneTriangles, Springs, StrainLimit, Triangles,
+    BendingDesc, BendingHinges, BendingLawDesc, MembraneTriangles, Springs, StrainLimit, Triangles, retain_kept,
 };
 use crate::solver::elements::NO_HINGE;
 
@@ -79,7 +79,7 @@ pub fn tear(
     }
     let keep: Vec<bool> = membranes.indices.iter().map(|t| !severs(t)).collect();
     let membranes_before = membranes.indices.len();
-    retain_parallel(&mut membranes.indices, &mut membranes.elements, &keep);
+    membranes.retain(&keep);
     Torn {
         springs: removed_springs,
         triangles: before - triangles.len(),
@@ -124,12 +124,6 @@ fn cut_bending(hinges: &mut BendingHinges, severs: impl Fn(&[u32]) -> bool) {
 fn retain_parallel<A, B>(a: &mut Vec<A>, b: &mut Vec<B>, keep: &[bool]) {
     retain_kept(a, keep);
     retain_kept(b, keep);
-}
-
-/// Keeps the entries of a column where `keep` is true.
-fn retain_kept<T>(column: &mut Vec<T>, keep: &[bool]) {
-    let mut k = keep.iter();
-    column.retain(|_| *k.next().expect("one flag per entry"));
 }
 
 #[cfg(test)]

@@ -15,6 +15,7 @@ mod user_forces;
 
 pub use cloth::{BendingDesc, BendingLawDesc, Cloth, ClothMaterial, MembraneDesc, ParticleLayout, SpringCoefficients};
 pub use collider::{Collider, ContactStats, SelfCollision, SelfTouching, Touching};
+pub(crate) use elements::retain_kept;
 pub use elements::{BendingHinges, MembraneTriangles, StrainLimit};
 pub use particles::Particles;
 pub use pins::{Grip, Grips, Pins};

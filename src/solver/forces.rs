@@ -422,7 +422,7 @@ impl ForceModel<'_> {
     /// Forces of membrane triangle `m` on its corners at positions `x`.
     fn membrane_forces(&self, m: usize, x: &[Vec3]) -> [Vec3; 3] {
         let membranes = self.membranes;
-        membranes.elements[m].forces(&membranes.material, membranes.indices[m].map(|p| x[p as usize]))
+        membranes.element(m).forces(&membranes.material, membranes.indices[m].map(|p| x[p as usize]))
     }
 
     /// The total force on each of `particles` at state `(x, v)` and time `t` [N], as
@@ -631,7 +631,7 @@ impl ForceModel<'_> {
         let membrane_positions = |m: usize| topology.membrane_positions.get(m);
         add_elements(dfdx, pattern, (bounds, &row_parts.membranes), membrane_positions, triangles, |m| {
             let corners = triangles(m).map(|p| x[p as usize]);
-            self.membranes.elements[m].position_jacobian(material, corners, definite)
+            self.membranes.element(m).position_jacobian(material, corners, definite)
         });
         let rate = self.damping_rate();
         if rate > 0.0 {
@@ -660,7 +660,7 @@ impl ForceModel<'_> {
         let material = &self.membranes.material;
         let membranes = reduce::sum(self.membranes.indices.len(), |m| {
             let corners = self.membranes.indices[m].map(|p| x[p as usize]);
-            f64::from(self.membranes.elements[m].energy(material, corners))
+            f64::from(self.membranes.element(m).energy(material, corners))
         });
         gravity + springs + hinges + membranes
     }

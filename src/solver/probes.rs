@@ -164,7 +164,7 @@ pub fn shadow_area(x: &[Vec3], triangles: &[[u32; 3]], cell: f32) -> f32 {
 pub fn mean_normal_stress(x: &[Vec3], membranes: &MembraneTriangles, direction: Vec3) -> f32 {
     let d = direction.normalize();
     let (mut weighted, mut area) = (0.0f64, 0.0f64);
-    for (tri, element) in membranes.indices.iter().zip(&membranes.elements) {
+    for (tri, element) in membranes.elements() {
         let corners = tri.map(|p| x[p as usize]);
         let current = super::geometry::triangle_area(corners[0], corners[1], corners[2]);
         let f = element.deformation(corners);
