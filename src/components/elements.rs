@@ -71,12 +71,13 @@ impl BendingHinges {
 /// Membrane triangles: anisotropic St. Venant–Kirchhoff in the warp/weft frame (Z2).
 #[derive(Component, Debug, Clone, PartialEq)]
 pub struct MembraneTriangles {
-    /// Particle indices of each triangle.
+    /// Particle indices of each triangle: added with [`MembraneTriangles::push`] and
+    /// removed with [`MembraneTriangles::retain`], so that each keeps its rest state.
     pub indices: Vec<[u32; 3]>,
     /// Each triangle's rest state ([`MembraneTriangles::element`]) in two columns: a
     /// [`MembraneElement`]'s `Mat2` is aligned to 16 bytes, so an element took 32 bytes
     /// for its 20 (24 bytes a particle of a sheet), and kept as four floats instead, its
-    /// assembly's code took hang_256's 5 % longer (11.4 to 11.9 ms a frame against 10.7
+    /// assembly's code took hang_256's 5 % longer (11.4 to 12.2 ms a frame against 10.7
     /// to 11.2, alternating).
     rest_inverses: Vec<Mat2>,
     rest_areas: Vec<f32>,

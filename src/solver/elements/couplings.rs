@@ -13,9 +13,8 @@ use crate::solver::multigrid::scalar_lump;
 /// `s I`. Kept as scalars, 6 bytes where their columns fit 16-bit offsets (8 where not)
 /// where a block of ∂f/∂x and of the system took 36 (a third of a regular sheet's
 /// blocks), and products over them take 3 operations where a block took 18; found once
-/// per topology. The system's pattern is then the multigrid's
-/// finest level's, and what its lumping would move onto the diagonal from them is known
-/// ahead (`lumps`).
+/// per topology. The system's pattern is then the multigrid's finest level's, and what
+/// its lumping would move onto the diagonal from them is known ahead (`lumps`).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ConstantCouplings {
     /// Particle `i`'s couplings are its columns and `scales` from `offsets[i]` to
@@ -124,8 +123,7 @@ impl WeightedCouplings<'_> {
 mod tests {
     use super::*;
 
-    /// Rows `i` and `j` of the couplings `(i, j, s)`, both directions, as the rows read
-    /// them back.
+    /// The couplings of `rows` particles from `pairs`, and every row as it reads back.
     fn rows_of(rows: usize, pairs: &[(u32, u32, f32)]) -> (ConstantCouplings, Vec<Vec<(u32, f32)>>) {
         let couplings = ConstantCouplings::new(rows, || pairs.iter().copied());
         let read = (0..rows).map(|i| couplings.row(i).collect()).collect();
