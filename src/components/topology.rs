@@ -110,8 +110,11 @@ pub struct ClothTopology {
     pub membrane_positions: ElementPositions<6>,
     /// The particles in groups that share no element, for block descent's parallel sweeps.
     pub colouring: Colouring,
-    /// The particles grouped level by level, for the multigrid preconditioner.
-    pub hierarchy: Hierarchy,
+    /// The particles grouped level by level, for the multigrid preconditioner: built when
+    /// it first asks ([`ClothTopology::hierarchy`]), which the topology's rebuild does at
+    /// once where the solver preconditions with it. Built with every topology, it held
+    /// 122 bytes a particle of sphere_64, whose block Jacobi never reads it.
+    hierarchy: OnceLock<Hierarchy>,
     /// Inverse mass with pinned particles at zero [1/kg]: what the integrators accelerate.
     pub free_inv_mass: Vec<f32>,
     /// How many times this cache was built; lets tests see it is not rebuilt every step.
@@ -130,23 +133,7 @@ impl ClothTopology {
         builds: u32,
     ) -> Self {
         let count = inv_mass.len();
-        let springs_stencils = || springs.pairs.iter().map(|p| &p[..]);
-        // Every coupling, the bending faces' across an edge among them (under quadratic
-        // bending its pairs).
-        let quadratic: Vec<[u32; 2]> = hinges.quadratic.pairs().map(|(i, j, _)| [i, j]).collect();
-        let whole = BlockPattern::from_stencils(
-            count,
-            springs_stencils()
-                .chain(hinges.faces.iter().map(|f| &f.vertices[..]))
-                .chain(quadratic.iter().map(|p| &p[..]))
-                .chain(membranes.indices.iter().map(|t| &t[..])),
-        );
-        // Those of particles that share a spring or a triangle: the multigrid's finest
-        // level's.
-        let near = BlockPattern::from_stencils(
-            count,
-            springs_stencils().chain(triangles.indices.iter().chain(&membranes.indices).map(|t| &t[..])),
-        );
+        let (whole, near) = couplings(count, springs, &triangles.indices, hinges, membranes);
         // Hinge forces and face blocks gathered from their angles, unless the bending is
         // quadratic, whose couplings across an edge are constant and kept apart.
         let by_angles = !hinges.is_quadratic();
@@ -154,7 +141,7 @@ impl ClothTopology {
             true => whole.clone().with_upper(),
             false => near.clone().with_upper(),
         };
-        let (colouring, hierarchy) = (Colouring::greedy(&whole), Hierarchy::build(&whole, &near, &pattern));
+        let colouring = Colouring::greedy(&whole);
         let mut free_inv_mass = inv_mass.to_vec();
         for &p in pinned {
             free_inv_mass[p as usize] = 0.0;
@@ -181,11 +168,26 @@ impl ClothTopology {
             },
             membrane_positions: ElementPositions::new(&pattern, membranes.indices.iter().copied()),
             colouring,
-            hierarchy,
+            hierarchy: OnceLock::new(),
             pattern,
             free_inv_mass,
             builds,
         }
+    }
+
+    /// The multigrid's levels over this topology, built at the first call from the cloth's
+    /// elements it was built from.
+    pub fn hierarchy(
+        &self,
+        springs: &Springs,
+        triangles: &[[u32; 3]],
+        hinges: &BendingHinges,
+        membranes: &MembraneTriangles,
+    ) -> &Hierarchy {
+        self.hierarchy.get_or_init(|| {
+            let (whole, near) = couplings(self.free_inv_mass.len(), springs, triangles, hinges, membranes);
+            Hierarchy::build(&whole, &near, &self.pattern)
+        })
     }
 
     /// The triangles of `triangles`, those this topology was built from, that touch each
@@ -199,6 +201,32 @@ impl ClothTopology {
     pub fn edges(&self, triangles: &[[u32; 3]]) -> &[[u32; 2]] {
         self.edges.get_or_init(|| ContactMesh::edges_of(triangles))
     }
+}
+
+/// The patterns of `count` particles' couplings: every one, the bending faces' across an
+/// edge among them (under quadratic bending its pairs), and those of particles that share
+/// a spring or a triangle (the multigrid's finest level's).
+fn couplings(
+    count: usize,
+    springs: &Springs,
+    triangles: &[[u32; 3]],
+    hinges: &BendingHinges,
+    membranes: &MembraneTriangles,
+) -> (BlockPattern, BlockPattern) {
+    let springs_stencils = || springs.pairs.iter().map(|p| &p[..]);
+    let quadratic: Vec<[u32; 2]> = hinges.quadratic.pairs().map(|(i, j, _)| [i, j]).collect();
+    let whole = BlockPattern::from_stencils(
+        count,
+        springs_stencils()
+            .chain(hinges.faces.iter().map(|f| &f.vertices[..]))
+            .chain(quadratic.iter().map(|p| &p[..]))
+            .chain(membranes.indices.iter().map(|t| &t[..])),
+    );
+    let near = BlockPattern::from_stencils(
+        count,
+        springs_stencils().chain(triangles.iter().chain(&membranes.indices).map(|t| &t[..])),
+    );
+    (whole, near)
 }
 
 /// Per-cloth scratch buffers for integrators and force evaluation, reused every step so the

@@ -727,7 +727,8 @@ impl LinearDynamics for ClothDynamics<'_> {
     }
 
     fn hierarchy(&self) -> &Hierarchy {
-        &self.model.topology.hierarchy
+        let model = &self.model;
+        model.topology.hierarchy(model.springs, model.triangles, model.hinges, model.membranes)
     }
 
     /// The quadratic bending's, whose Jacobian is constant and alone reaches outside the
