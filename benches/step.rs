@@ -11,7 +11,7 @@ use selvedge::Simulation;
 use selvedge::builders::ClothData;
 use selvedge::builders::grid::build_grid;
 use selvedge::collision::intersection::IntersectionCounter;
-use selvedge::components::{BendingDesc, BendingLawDesc, ClothMaterial, ClothTopology, MembraneDesc};
+use selvedge::components::{BendingDesc, BendingLawDesc, ClothElements, ClothMaterial, ClothTopology, MembraneDesc};
 use selvedge::scene::parse_scene;
 use selvedge::solver::descent::{DescentSettings, DescentWorkspace, descend};
 use selvedge::solver::elements::{SymmetricBlockMatrix, VelocityJacobian};
@@ -170,7 +170,13 @@ fn kernels(c: &mut Criterion) {
         // One V-cycle of the multigrid preconditioner on the same system (its levels
         // built once, outside the timing): with the product above, what an iteration of
         // the hang scenes' conjugate gradients costs.
-        let hierarchy = topology.hierarchy(&cloth.springs, &cloth.triangles.indices, &cloth.hinges, &cloth.membranes);
+        let elements = ClothElements {
+            springs: &cloth.springs,
+            triangles: &cloth.triangles.indices,
+            hinges: &cloth.hinges,
+            membranes: &cloth.membranes,
+        };
+        let hierarchy = topology.hierarchy(elements);
         let system_at = StepSystem::new(pattern, &system);
         let mut multigrid = Multigrid::default();
         multigrid.prepare(hierarchy, system_at, &filter, &x);
@@ -181,7 +187,7 @@ fn kernels(c: &mut Criterion) {
             on_pool(b, || {
                 descend(
                     StepSystem::new(pattern, &system),
-                    &topology.colouring,
+                    topology.colouring(elements),
                     &rhs,
                     &filter,
                     &one_sweep,

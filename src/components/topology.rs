@@ -108,8 +108,11 @@ pub struct ClothTopology {
     pub face_positions: ElementPositions<21>,
     /// Where each membrane triangle's local blocks go.
     pub membrane_positions: ElementPositions<6>,
-    /// The particles in groups that share no element, for block descent's parallel sweeps.
-    pub colouring: Colouring,
+    /// The particles in groups that share no element, for block descent's parallel sweeps:
+    /// built when they first ask ([`ClothTopology::colouring`]), which the topology's
+    /// rebuild does at once where block descent solves the step (4 bytes a particle that
+    /// the conjugate gradients never read).
+    colouring: OnceLock<Colouring>,
     /// The particles grouped level by level, for the multigrid preconditioner: built when
     /// it first asks ([`ClothTopology::hierarchy`]), which the topology's rebuild does at
     /// once where the solver preconditions with it. Built with every topology, it held
@@ -133,15 +136,15 @@ impl ClothTopology {
         builds: u32,
     ) -> Self {
         let count = inv_mass.len();
-        let (whole, near) = couplings(count, springs, &triangles.indices, hinges, membranes);
+        let elements = ClothElements { springs, triangles: &triangles.indices, hinges, membranes };
+        let (whole, near) = elements.couplings(count);
         // Hinge forces and face blocks gathered from their angles, unless the bending is
         // quadratic, whose couplings across an edge are constant and kept apart.
         let by_angles = !hinges.is_quadratic();
         let pattern = match by_angles {
-            true => whole.clone().with_upper(),
-            false => near.clone().with_upper(),
+            true => whole.with_upper(),
+            false => near.with_upper(),
         };
-        let colouring = Colouring::greedy(&whole);
         let mut free_inv_mass = inv_mass.to_vec();
         for &p in pinned {
             free_inv_mass[p as usize] = 0.0;
@@ -167,7 +170,7 @@ impl ClothTopology {
                 false => ElementPositions::default(),
             },
             membrane_positions: ElementPositions::new(&pattern, membranes.indices.iter().copied()),
-            colouring,
+            colouring: OnceLock::new(),
             hierarchy: OnceLock::new(),
             pattern,
             free_inv_mass,
@@ -177,17 +180,17 @@ impl ClothTopology {
 
     /// The multigrid's levels over this topology, built at the first call from the cloth's
     /// elements it was built from.
-    pub fn hierarchy(
-        &self,
-        springs: &Springs,
-        triangles: &[[u32; 3]],
-        hinges: &BendingHinges,
-        membranes: &MembraneTriangles,
-    ) -> &Hierarchy {
+    pub fn hierarchy(&self, elements: ClothElements<'_>) -> &Hierarchy {
         self.hierarchy.get_or_init(|| {
-            let (whole, near) = couplings(self.free_inv_mass.len(), springs, triangles, hinges, membranes);
+            let (whole, near) = elements.couplings(self.free_inv_mass.len());
             Hierarchy::build(&whole, &near, &self.pattern)
         })
+    }
+
+    /// The colouring of this topology's particles for block descent, found at the first
+    /// call from the cloth's elements it was built from.
+    pub fn colouring(&self, elements: ClothElements<'_>) -> &Colouring {
+        self.colouring.get_or_init(|| Colouring::greedy(&elements.couplings(self.free_inv_mass.len()).0))
     }
 
     /// The triangles of `triangles`, those this topology was built from, that touch each
@@ -203,30 +206,40 @@ impl ClothTopology {
     }
 }
 
-/// The patterns of `count` particles' couplings: every one, the bending faces' across an
-/// edge among them (under quadratic bending its pairs), and those of particles that share
-/// a spring or a triangle (the multigrid's finest level's).
-fn couplings(
-    count: usize,
-    springs: &Springs,
-    triangles: &[[u32; 3]],
-    hinges: &BendingHinges,
-    membranes: &MembraneTriangles,
-) -> (BlockPattern, BlockPattern) {
-    let springs_stencils = || springs.pairs.iter().map(|p| &p[..]);
-    let quadratic: Vec<[u32; 2]> = hinges.quadratic.pairs().map(|(i, j, _)| [i, j]).collect();
-    let whole = BlockPattern::from_stencils(
-        count,
-        springs_stencils()
-            .chain(hinges.faces.iter().map(|f| &f.vertices[..]))
-            .chain(quadratic.iter().map(|p| &p[..]))
-            .chain(membranes.indices.iter().map(|t| &t[..])),
-    );
-    let near = BlockPattern::from_stencils(
-        count,
-        springs_stencils().chain(triangles.iter().chain(&membranes.indices).map(|t| &t[..])),
-    );
-    (whole, near)
+/// The elements a cloth's topology was built from: what its parts built on demand
+/// ([`ClothTopology::hierarchy`], [`ClothTopology::colouring`]) are found from.
+#[derive(Clone, Copy)]
+pub struct ClothElements<'a> {
+    /// Its springs.
+    pub springs: &'a Springs,
+    /// Its triangles' particles.
+    pub triangles: &'a [[u32; 3]],
+    /// Its bending.
+    pub hinges: &'a BendingHinges,
+    /// Its membrane triangles.
+    pub membranes: &'a MembraneTriangles,
+}
+
+impl ClothElements<'_> {
+    /// The patterns of `count` particles' couplings: every one, the bending faces' across
+    /// an edge among them (under quadratic bending its pairs), and those of particles that
+    /// share a spring or a triangle (the multigrid's finest level's).
+    fn couplings(&self, count: usize) -> (BlockPattern, BlockPattern) {
+        let springs_stencils = || self.springs.pairs.iter().map(|p| &p[..]);
+        let quadratic: Vec<[u32; 2]> = self.hinges.quadratic.pairs().map(|(i, j, _)| [i, j]).collect();
+        let whole = BlockPattern::from_stencils(
+            count,
+            springs_stencils()
+                .chain(self.hinges.faces.iter().map(|f| &f.vertices[..]))
+                .chain(quadratic.iter().map(|p| &p[..]))
+                .chain(self.membranes.indices.iter().map(|t| &t[..])),
+        );
+        let near = BlockPattern::from_stencils(
+            count,
+            springs_stencils().chain(self.triangles.iter().chain(&self.membranes.indices).map(|t| &t[..])),
+        );
+        (whole, near)
+    }
 }
 
 /// Per-cloth scratch buffers for integrators and force evaluation, reused every step so the

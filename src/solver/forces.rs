@@ -17,7 +17,7 @@ use super::multigrid::Hierarchy;
 use super::reduce;
 use crate::collision::body_contact::ContactBody;
 use crate::collision::motion_bounds::Surface;
-use crate::components::{BendingHinges, ClothTopology, Csr, MembraneTriangles, Springs};
+use crate::components::{BendingHinges, ClothElements, ClothTopology, Csr, MembraneTriangles, Springs};
 
 /// Air around the cloth.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -326,7 +326,17 @@ pub struct ForceModel<'a> {
     pub user_forces: &'a [(u32, Vec3)],
 }
 
-impl ForceModel<'_> {
+impl<'a> ForceModel<'a> {
+    /// The cloth's elements, from which its topology finds what it builds on demand.
+    pub fn elements(&self) -> ClothElements<'a> {
+        ClothElements {
+            springs: self.springs,
+            triangles: self.triangles,
+            hinges: self.hinges,
+            membranes: self.membranes,
+        }
+    }
+
     fn spring(&self, s: usize) -> SpringElement {
         SpringElement {
             rest: self.springs.rest_length[s],
@@ -714,7 +724,7 @@ impl LinearDynamics for ClothDynamics<'_> {
     }
 
     fn colouring(&self) -> &Colouring {
-        &self.model.topology.colouring
+        self.model.topology.colouring(self.model.elements())
     }
 
     fn contact_surface(&self) -> Option<Surface<'_>> {
@@ -727,8 +737,7 @@ impl LinearDynamics for ClothDynamics<'_> {
     }
 
     fn hierarchy(&self) -> &Hierarchy {
-        let model = &self.model;
-        model.topology.hierarchy(model.springs, model.triangles, model.hinges, model.membranes)
+        self.model.topology.hierarchy(self.model.elements())
     }
 
     /// The quadratic bending's, whose Jacobian is constant and alone reaches outside the
