@@ -11,7 +11,9 @@ use selvedge::Simulation;
 use selvedge::builders::ClothData;
 use selvedge::builders::grid::build_grid;
 use selvedge::collision::intersection::IntersectionCounter;
-use selvedge::components::{BendingDesc, BendingLawDesc, ClothElements, ClothMaterial, ClothTopology, MembraneDesc};
+use selvedge::components::{
+    BendingDesc, BendingLawDesc, ClothElements, ClothMaterial, ClothTopology, MembraneDesc, SolverParts,
+};
 use selvedge::scene::parse_scene;
 use selvedge::solver::descent::{DescentSettings, DescentWorkspace, descend};
 use selvedge::solver::elements::{SymmetricBlockMatrix, VelocityJacobian};
@@ -81,6 +83,7 @@ impl Sheet {
             &cloth.membranes,
             &[],
             1,
+            SolverParts::default(),
         );
         Self { cloth, topology }
     }

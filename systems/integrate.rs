@@ -126,8 +126,8 @@ pub fn integrate_cloths(
         }
         particles.position = x;
         particles.velocity = v;
-        // The support is read only by the contact with bodies: none, none kept (12 bytes a
-        // particle).
+        // Only the contact with bodies reads the support: with no collider none is kept
+        // (12 bytes a particle).
         support.clear();
         if !colliders.is_empty() {
             support.resize(particles.len(), Vec3::ZERO);

@@ -3,7 +3,7 @@
 use bevy_ecs::prelude::*;
 
 use crate::components::{
-    BendingHinges, ClothElements, ClothTopology, MembraneTriangles, Particles, Pins, Springs, Triangles,
+    BendingHinges, ClothTopology, MembraneTriangles, Particles, Pins, SolverParts, Springs, Triangles,
 };
 use crate::resources::SolverSettings;
 use crate::schedule::{FrameSystems, SimSchedules};
@@ -12,10 +12,11 @@ use crate::solver::integrate::Integrator;
 
 /// Rebuilds the incidence rows, the derivative pattern and the free inverse masses of
 /// every cloth whose elements or pins changed since the last frame (and of new cloths);
-/// others keep theirs. Runs in [`FrameSystems::Prepare`]. Where the implicit solve is
-/// preconditioned by multigrid, its levels' structure is built here too, with the
-/// topology as before, not in the first solve, where the scratch of its patterns would
-/// come on top of the solver's buffers; so is block descent's colouring where it solves.
+/// others keep theirs. Runs in [`FrameSystems::Prepare`]. The parts of the solver that
+/// will step the cloth are built with it, as before: the multigrid's levels' structure
+/// where the implicit solve is preconditioned by multigrid (not in the first solve, where
+/// the scratch of its patterns would come on top of the solver's buffers), and block
+/// descent's colouring where it solves.
 pub fn rebuild_cloth_topology(
     solver: Res<SolverSettings>,
     mut cloths: Query<
@@ -24,20 +25,23 @@ pub fn rebuild_cloth_topology(
     >,
 ) {
     let linear_solver = solver.method.implicit.linear_solver;
-    let multigrid = linear_solver == LinearSolver::Multigrid;
-    let descent =
-        solver.integrator == Integrator::BlockDescent || matches!(linear_solver, LinearSolver::BlockDescent(_));
+    let parts = SolverParts {
+        hierarchy: linear_solver == LinearSolver::Multigrid,
+        colouring: solver.integrator == Integrator::BlockDescent
+            || matches!(linear_solver, LinearSolver::BlockDescent(_)),
+    };
     for (particles, springs, triangles, hinges, membranes, pins, mut topology) in &mut cloths {
         let builds = topology.builds + 1;
-        *topology =
-            ClothTopology::build(&particles.inv_mass, springs, triangles, hinges, membranes, &pins.particles, builds);
-        let elements = ClothElements { springs, triangles: &triangles.indices, hinges, membranes };
-        if multigrid {
-            topology.hierarchy(elements);
-        }
-        if descent {
-            topology.colouring(elements);
-        }
+        *topology = ClothTopology::build(
+            &particles.inv_mass,
+            springs,
+            triangles,
+            hinges,
+            membranes,
+            &pins.particles,
+            builds,
+            parts,
+        );
     }
 }
 

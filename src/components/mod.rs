@@ -21,6 +21,6 @@ pub use particles::Particles;
 pub use pins::{Grip, Grips, Pins};
 pub use prop::{Prop, RigidStandIn};
 pub use springs::{SpringKind, Springs};
-pub use topology::{ClothElements, ClothTopology, Csr, RenderMesh, SolverWorkspace};
+pub use topology::{ClothElements, ClothTopology, Csr, RenderMesh, SolverParts, SolverWorkspace};
 pub use triangles::Triangles;
 pub use user_forces::UserForces;

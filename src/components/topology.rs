@@ -109,13 +109,13 @@ pub struct ClothTopology {
     /// Where each membrane triangle's local blocks go.
     pub membrane_positions: ElementPositions<6>,
     /// The particles in groups that share no element, for block descent's parallel sweeps:
-    /// built when they first ask ([`ClothTopology::colouring`]), which the topology's
-    /// rebuild does at once where block descent solves the step (4 bytes a particle that
-    /// the conjugate gradients never read).
+    /// built with the topology where block descent solves the step ([`SolverParts`]),
+    /// else when first asked for ([`ClothTopology::colouring`]): 4 bytes a particle that
+    /// the conjugate gradients never read.
     colouring: OnceLock<Colouring>,
-    /// The particles grouped level by level, for the multigrid preconditioner: built when
-    /// it first asks ([`ClothTopology::hierarchy`]), which the topology's rebuild does at
-    /// once where the solver preconditions with it. Built with every topology, it held
+    /// The particles grouped level by level, for the multigrid preconditioner: built with
+    /// the topology where the solver preconditions with it ([`SolverParts`]), else when
+    /// first asked for ([`ClothTopology::hierarchy`]). Built with every topology, it held
     /// 122 bytes a particle of sphere_64, whose block Jacobi never reads it.
     hierarchy: OnceLock<Hierarchy>,
     /// Inverse mass with pinned particles at zero [1/kg]: what the integrators accelerate.
@@ -125,7 +125,9 @@ pub struct ClothTopology {
 }
 
 impl ClothTopology {
-    /// Derives the topology of a cloth. `builds` counts how often this was done.
+    /// Derives the topology of a cloth, with the `parts` its solver will use. `builds`
+    /// counts how often this was done.
+    #[allow(clippy::too_many_arguments)]
     pub fn build(
         inv_mass: &[f32],
         springs: &Springs,
@@ -134,6 +136,7 @@ impl ClothTopology {
         membranes: &MembraneTriangles,
         pinned: &[u32],
         builds: u32,
+        parts: SolverParts,
     ) -> Self {
         let count = inv_mass.len();
         let elements = ClothElements { springs, triangles: &triangles.indices, hinges, membranes };
@@ -142,9 +145,12 @@ impl ClothTopology {
         // quadratic, whose couplings across an edge are constant and kept apart.
         let by_angles = !hinges.is_quadratic();
         let pattern = match by_angles {
-            true => whole.with_upper(),
-            false => near.with_upper(),
+            true => whole.clone().with_upper(),
+            false => near.clone().with_upper(),
         };
+        // Made from the patterns at hand, not found again by the accessors.
+        let colouring = parts.colouring.then(|| Colouring::greedy(&whole));
+        let hierarchy = parts.hierarchy.then(|| Hierarchy::build(&whole, &near, &pattern));
         let mut free_inv_mass = inv_mass.to_vec();
         for &p in pinned {
             free_inv_mass[p as usize] = 0.0;
@@ -170,8 +176,8 @@ impl ClothTopology {
                 false => ElementPositions::default(),
             },
             membrane_positions: ElementPositions::new(&pattern, membranes.indices.iter().copied()),
-            colouring: OnceLock::new(),
-            hierarchy: OnceLock::new(),
+            colouring: colouring.map_or_else(OnceLock::new, OnceLock::from),
+            hierarchy: hierarchy.map_or_else(OnceLock::new, OnceLock::from),
             pattern,
             free_inv_mass,
             builds,
@@ -204,6 +210,18 @@ impl ClothTopology {
     pub fn edges(&self, triangles: &[[u32; 3]]) -> &[[u32; 2]] {
         self.edges.get_or_init(|| ContactMesh::edges_of(triangles))
     }
+}
+
+/// Which of a topology's parts built on demand ([`ClothTopology::hierarchy`],
+/// [`ClothTopology::colouring`]) its build makes at once, from the patterns it finds
+/// anyway: those of the solver that will step the cloth. Made on demand instead, their
+/// patterns are found a second time (45 to 50 ms of hang_256's start).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SolverParts {
+    /// The multigrid's levels' structure.
+    pub hierarchy: bool,
+    /// Block descent's colouring.
+    pub colouring: bool,
 }
 
 /// The elements a cloth's topology was built from: what its parts built on demand

@@ -780,7 +780,7 @@ mod tests {
     use super::*;
     use crate::builders::grid::build_grid;
     use crate::components::{
-        BendingDesc, BendingLawDesc, ClothMaterial, MembraneDesc, Particles, SpringCoefficients, Triangles,
+        BendingDesc, BendingLawDesc, ClothMaterial, MembraneDesc, Particles, SolverParts, SpringCoefficients, Triangles,
     };
 
     /// A cloth and its topology, from which a test borrows its force model.
@@ -824,7 +824,16 @@ mod tests {
             }
             let (particles, springs, triangles, hinges, membranes) =
                 (data.particles, data.springs, data.triangles, data.hinges, data.membranes);
-            let topology = ClothTopology::build(&particles.inv_mass, &springs, &triangles, &hinges, &membranes, &[], 1);
+            let topology = ClothTopology::build(
+                &particles.inv_mass,
+                &springs,
+                &triangles,
+                &hinges,
+                &membranes,
+                &[],
+                1,
+                SolverParts::default(),
+            );
             Self { particles, springs, triangles, hinges, membranes, topology }
         }
 

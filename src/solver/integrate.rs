@@ -290,9 +290,9 @@ const ERROR_FLOOR: f32 = 1e-6;
 
 /// Advances `(x, v)` from time `t` by `h` [s] with `method`. For an explicit method the
 /// caller has filled `ws.start_acceleration` with the acceleration at `(x, v, t)` (the
-/// implicit methods evaluate their own, and honour the contact `constraints`, solving with the `bodies`
-/// whose velocities the constraints follow; explicit methods leave contacts to the
-/// contact stage).
+/// implicit methods evaluate their own, and honour the contact `constraints`, solving
+/// with the `bodies` whose velocities the constraints follow; explicit methods leave
+/// contacts to the contact stage).
 pub fn step(
     method: Integrator,
     dynamics: &mut impl LinearDynamics,

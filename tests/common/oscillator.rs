@@ -3,7 +3,9 @@
 //! and a lone particle in gravity.
 
 use glam::Vec3;
-use selvedge::components::{BendingHinges, ClothTopology, MembraneTriangles, SpringKind, Springs, Triangles};
+use selvedge::components::{
+    BendingHinges, ClothTopology, MembraneTriangles, SolverParts, SpringKind, Springs, Triangles,
+};
 use selvedge::solver::forces::{Air, ClothDynamics, ForceModel, ForceScratch};
 use selvedge::solver::integrate::{Integrator, IntegratorWorkspace, MethodSettings, StepReport, step};
 
@@ -52,7 +54,16 @@ impl ParticleSystem {
         let inv_mass: Vec<f32> = masses.iter().map(|m| 1.0 / m).collect();
         let (triangles, hinges, membranes) =
             (Triangles::default(), BendingHinges::default(), MembraneTriangles::default());
-        let topology = ClothTopology::build(&inv_mass, &springs, &triangles, &hinges, &membranes, pinned, 1);
+        let topology = ClothTopology::build(
+            &inv_mass,
+            &springs,
+            &triangles,
+            &hinges,
+            &membranes,
+            pinned,
+            1,
+            SolverParts::default(),
+        );
         Self { x, inv_mass, springs, gravity, topology, triangles, hinges, membranes }
     }
 
