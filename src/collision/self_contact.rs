@@ -186,8 +186,16 @@ pub struct SelfContactSolver {
     untangler: Untangler,
     /// Candidate pairs whose swept boxes meet.
     pairs: Vec<Pair>,
-    /// The end positions the candidates were listed for.
+    /// The end positions of the sweeps the candidates were listed for, and where
+    /// [`SelfContactSolver::sweeps_listed`] their start positions, else the ends again:
+    /// the corners of the box each vertex must stay near
+    /// ([`SelfContactSolver::candidates_cover`]).
+    listed_start: Vec<Vec3>,
     listed_end: Vec<Vec3>,
+    /// Whether the candidates serve while each vertex stays near the box of its whole
+    /// listed sweep, not only near its end: where no sweep of the listing was longer than
+    /// the margin.
+    sweeps_listed: bool,
     /// Whether some vertex was exempt (being untangled) when they were listed, which
     /// left its pairs out.
     listed_with_exemptions: bool,
@@ -377,6 +385,14 @@ impl SelfContactSolver {
     /// heap (180 springs in a step instead of 181).
     fn candidates(&mut self, mesh: &ContactMesh, x0: &[Vec3], x1: &[Vec3]) {
         self.refit(mesh, x0, x1);
+        let gap = largest_gap(mesh);
+        let (margin, grown) = (Self::margin(gap), Self::grown(gap));
+        let longest_sweep =
+            x0.par_iter().zip(x1).with_min_len(PARALLEL_MIN_LEN).map(|(a, b)| a.distance(*b)).reduce(|| 0.0, f32::max);
+        let sweeps = longest_sweep <= margin;
+        self.sweeps_listed = sweeps;
+        self.listed_start.clear();
+        self.listed_start.extend_from_slice(if sweeps { x0 } else { x1 });
         self.listed_end.clear();
         self.listed_end.extend_from_slice(x1);
         let (triangle_tree, edge_tree) = (&self.triangle_tree, &self.edge_tree);
@@ -384,8 +400,6 @@ impl SelfContactSolver {
         let free = |vertices: &[u32]| !vertices.iter().any(|&k| exempt[k as usize]);
         self.listed_with_exemptions = exempt.contains(&true);
         let points = mesh.len();
-        let gap = largest_gap(mesh);
-        let (margin, grown) = (Self::margin(gap), Self::grown(gap));
         self.pair_gather.run(points, &mut self.pairs, |i, out| {
             let p = i as u32;
             if free(&[p]) {
@@ -393,7 +407,7 @@ impl SelfContactSolver {
                 triangle_tree.query(&swept_box(&[p], x0, x1).inflated(grown), |t| {
                     let triangle = &mesh.triangles[t as usize];
                     let pair = Pair::PointTriangle(p, t);
-                    if !triangle.contains(&p) && free(triangle) && may_touch(mesh, pair, x0, x1, margin) {
+                    if !triangle.contains(&p) && free(triangle) && may_touch(mesh, pair, x0, x1, margin, sweeps) {
                         out.push(pair);
                     }
                 });
@@ -414,7 +428,7 @@ impl SelfContactSolver {
                     && b != c
                     && b != d
                     && free(&[a, b, c, d])
-                    && may_touch(mesh, Pair::EdgeEdge(e, f), x0, x1, margin)
+                    && may_touch(mesh, Pair::EdgeEdge(e, f), x0, x1, margin, sweeps)
                 {
                     out.push([e, f]);
                 }
@@ -424,30 +438,51 @@ impl SelfContactSolver {
         self.pairs.extend(self.edge_pairs.iter().map(|&[e, f]| Pair::EdgeEdge(e, f)));
     }
 
-    /// Whether the candidates still cover the sweeps to `x1`: no end point has moved by
-    /// half the margin since they were listed, beyond a motion common to all of them (the
-    /// centre of the box of their displacements), which brings no pair closer. (A pair's
-    /// swept boxes, so moved back, are then each within half the margin of those listed,
-    /// so a pair that can come within its separation still had listed boxes closer than
-    /// its separation and the margin, which they were grown by together
-    /// ([`SelfContactSolver::grown`]). The sweeps' starts must be covered too,
-    /// which they are within the step that listed them, and are checked the same way for
-    /// a later step's; at any time between, the common motion is a blend of the two.) A
-    /// falling sheet, moving 5 mm a step at 10 steps a frame against a margin of 2 mm,
-    /// listed its candidates again at every step, most of sphere_64's fall.
+    /// Whether the candidates still cover the sweeps to `x1`: no end point, moved back by
+    /// a motion common to all of them (the centre of the box of their displacements since
+    /// the listing's end), which brings no pair closer, lies farther than half the margin
+    /// from where it was listed for: its sweep's end, or where
+    /// [`SelfContactSolver::sweeps_listed`] the box of its whole sweep. (A pair's swept
+    /// boxes, so moved back, are then each within half the margin of those listed, so a
+    /// pair that can come within its separation still had listed boxes closer than its
+    /// separation and the margin, which they were grown by together
+    /// ([`SelfContactSolver::grown`]).
+    /// The sweeps' starts must be covered too, which they are within the step that listed
+    /// them, and are checked the same way for a later step's; at any time between, the
+    /// common motion is a blend of the two.) A falling sheet, moving 5 mm a step at 10
+    /// steps a frame against a half margin of 2 mm, lists its candidates again at every
+    /// step, most of sphere_64's fall.
+    ///
+    /// The box of the listed sweep, not its end alone, where the sweeps were short: a
+    /// vertex caught between the step and the contacts goes back and forth over the same
+    /// few millimetres, the step carrying it one way and the contacts after it back. On
+    /// sphere_64's drape stepped once a frame with multigrid, two vertices of a fold went
+    /// 2.5 to 2.8 mm each way every step, beyond the 2 mm half margin from the listing's
+    /// end, and listing the candidates twice a step (after the step, and for the springs
+    /// of the next) took 5.7 of a resting frame's 15 ms. Sweeps longer than the margin (a
+    /// landing) keep the end alone: the boxes' wider reach ([`may_touch`]) listed more
+    /// pairs there: with every sweep listed so, sphere_64's peak memory grew by 8 % (3 053
+    /// against 2 824 bytes a particle).
     fn candidates_cover(&self, mesh: &ContactMesh, x1: &[Vec3]) -> bool {
         if x1.len() != self.listed_end.len() {
             return false;
         }
         let half = 0.5 * Self::margin(largest_gap(mesh));
         let half_squared = half * half;
-        let moves =
-            || x1.par_iter().zip(&self.listed_end).with_min_len(PARALLEL_MIN_LEN).map(|(now, listed)| *now - *listed);
-        let (low, high) = moves()
-            .map(|d| (d, d))
+        let (low, high) = x1
+            .par_iter()
+            .zip(&self.listed_end)
+            .with_min_len(PARALLEL_MIN_LEN)
+            .map(|(now, listed)| (*now - *listed, *now - *listed))
             .reduce(|| (Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), (c, d)| (a.min(c), b.max(d)));
         let common = 0.5 * (low + high);
-        moves().all(|d| (d - common).length_squared() < half_squared)
+        x1.par_iter().zip(&self.listed_start).zip(&self.listed_end).with_min_len(PARALLEL_MIN_LEN).all(
+            |((now, start), end)| {
+                let moved_back = *now - common;
+                let nearest = moved_back.clamp(start.min(*end), start.max(*end));
+                moved_back.distance_squared(nearest) < half_squared
+            },
+        )
     }
 
     /// Lists in `hits` the candidate pairs whose paths from `x0` to `x1` touch. With
@@ -625,20 +660,28 @@ fn closest(mesh: &ContactMesh, pair: Pair, x: &[Vec3]) -> (Stencil, Vec3) {
 
 /// Whether a pair whose boxes met may come within its separation while it stays listed:
 /// its distance at the listing's end `x1` is within its separation plus the most that
-/// distance can shrink, in the listing's own step (the most its two sides' vertices move
-/// apart from `x1` back to `x0`) or in a later one (the `margin`, twice the half margin
-/// each vertex may move beyond the common motion, see
-/// [`SelfContactSolver::candidates_cover`]), with a thousandth for rounding.
-fn may_touch(mesh: &ContactMesh, pair: Pair, x0: &[Vec3], x1: &[Vec3], margin: f32) -> bool {
+/// distance can shrink, with a thousandth for rounding. The distance shrinks by no more
+/// than the farthest two vertices of the pair's two sides move apart. In the listing's
+/// own step that is the most they move apart from `x1` back to `x0`; in a later one, each
+/// vertex moves beyond the common motion by no more than half the `margin` from its
+/// listed end ([`SelfContactSolver::candidates_cover`]), so twice that. Where the
+/// `sweeps` were listed, a vertex may stay anywhere within half the margin of the box of
+/// its sweep, so within that and its sweep's length of its listed end: the margin and
+/// the longest sweep of each side then bound both.
+fn may_touch(mesh: &ContactMesh, pair: Pair, x0: &[Vec3], x1: &[Vec3], margin: f32, sweeps: bool) -> bool {
     let distance = closest(mesh, pair, x1).0.relative(x1).length();
     let vertices = pair_vertices(mesh, pair);
     let moves = vertices.map(|k| x0[k as usize] - x1[k as usize]);
-    let first_side = first_side(pair);
-    let apart = (0..first_side)
-        .flat_map(|k| (first_side..4).map(move |j| (k, j)))
-        .fold(0.0f32, |most, (k, j)| most.max(moves[k].distance(moves[j])));
+    let (first, second) = moves.split_at(first_side(pair));
+    let shrink = if sweeps {
+        let longest = |side: &[Vec3]| side.iter().fold(0.0f32, |most, m| most.max(m.length()));
+        margin + longest(first) + longest(second)
+    } else {
+        let apart = first.iter().flat_map(|a| second.iter().map(move |b| a.distance(*b))).fold(0.0f32, f32::max);
+        margin.max(apart)
+    };
     let (gap, _) = pair_gap_and_friction(mesh, pair);
-    distance <= 1.001 * (gap + margin.max(apart))
+    distance <= 1.001 * (gap + shrink)
 }
 
 /// The pair at `x`, if it is closer than its separation.
@@ -876,6 +919,44 @@ mod tests {
             assert!(report.proximity > 0 && report.proximity == fresh_report.proximity, "kept {kept}: {report:?}");
             assert_eq!((next, next_v), (fresh, fresh_v), "kept {kept}");
         }
+    }
+
+    /// Vertices carried one way by a step and back by the next keep the candidates while
+    /// they stay near their listed sweeps, however far that is from the listing's ends,
+    /// and the candidates find what a fresh listing finds.
+    #[test]
+    fn candidates_serve_vertices_going_back_and_forth_over_their_listed_sweeps() {
+        let h = 0.01;
+        let (mesh, rest) = two_sheets(0.004);
+        // Two corners of the upper sheet 15 mm each way along x and back: sweeps within
+        // the 20 mm margin, but ends 30 mm apart once back.
+        let moved = |x: &[Vec3], by: f32| {
+            let mut x = x.to_vec();
+            x[4].x += by;
+            x[6].x -= by;
+            x
+        };
+        let velocity = |x0: &[Vec3], x1: &[Vec3]| x0.iter().zip(x1).map(|(a, b)| (*b - *a) / h).collect::<Vec<_>>();
+        let mut solver = SelfContactSolver::default();
+        let mut end = moved(&rest, 0.015);
+        let mut v = velocity(&rest, &end);
+        solver.resolve(&mesh, h, &rest, &mut end, &mut v);
+        let listed = solver.listed_end.clone();
+        let start = end;
+        let back = moved(&start, -0.015);
+        let displacements: Vec<Vec3> = back.iter().zip(&listed).map(|(now, then)| *now - *then).collect();
+        let (low, high) =
+            displacements.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), d| (l.min(*d), h.max(*d)));
+        let beyond = displacements.iter().map(|d| (*d - 0.5 * (low + high)).length()).fold(0.0f32, f32::max);
+        let half_margin = 0.5 * SelfContactSolver::margin(largest_gap(&mesh));
+        assert!(beyond > half_margin, "the ends alone would not serve: {beyond} against {half_margin}");
+        let (mut next, mut next_v) = (back.clone(), velocity(&start, &back));
+        let report = solver.resolve(&mesh, h, &start, &mut next, &mut next_v);
+        assert_eq!(solver.listed_end, listed, "kept");
+        let (mut fresh, mut fresh_v) = (back.clone(), velocity(&start, &back));
+        let fresh_report = SelfContactSolver::default().resolve(&mesh, h, &start, &mut fresh, &mut fresh_v);
+        assert!(report.proximity > 0 && report.proximity == fresh_report.proximity, "{report:?}");
+        assert_eq!((next, next_v), (fresh, fresh_v));
     }
 
     #[test]
