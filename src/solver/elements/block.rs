@@ -169,6 +169,16 @@ impl BlockPattern {
         }
     }
 
+    /// Row `i`'s columns from the diagonal on, and where a [`SymmetricBlockMatrix`] stores
+    /// their blocks: the part of [`BlockPattern::symmetric_row`] a product over the stored
+    /// blocks reads, without the slices of the part below the diagonal it does not.
+    #[inline(always)]
+    fn upper_row(&self, i: usize) -> (&[u32], std::ops::Range<usize>) {
+        let storage = self.upper[i] as usize..self.upper[i + 1] as usize;
+        let end = self.offsets[i + 1] as usize;
+        (&self.columns[end - storage.len()..end], storage)
+    }
+
     /// Index in a [`SymmetricBlockMatrix`]'s storage of block `(row, column)` or, below
     /// the diagonal, of its mirror, if the pattern has it.
     pub fn upper_index(&self, row: u32, column: u32) -> Option<u32> {
@@ -531,11 +541,11 @@ impl SymmetricBlockMatrix {
     fn add_rows_product(&self, pattern: &BlockPattern, rows: std::ops::Range<usize>, x: &[Vec3], out: &mut [Vec3]) {
         let first = rows.start;
         for i in rows {
-            let row = pattern.symmetric_row(i);
-            let (blocks, xi) = (&self.blocks[row.storage], Vec3A::from(x[i]));
+            let (above, storage) = pattern.upper_row(i);
+            let (blocks, xi) = (&self.blocks[storage], Vec3A::from(x[i]));
             // The diagonal block comes first.
             let mut sum = times(&blocks[0], xi);
-            for (&j, block) in row.above[1..].iter().zip(&blocks[1..]) {
+            for (&j, block) in above[1..].iter().zip(&blocks[1..]) {
                 let j = j as usize;
                 sum += times(block, Vec3A::from(x[j]));
                 out[j - first] += Vec3::from(transposed_times(block, xi));
