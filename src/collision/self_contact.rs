@@ -186,16 +186,14 @@ pub struct SelfContactSolver {
     untangler: Untangler,
     /// Candidate pairs whose swept boxes meet.
     pairs: Vec<Pair>,
-    /// The end positions of the sweeps the candidates were listed for, and where
-    /// [`SelfContactSolver::sweeps_listed`] their start positions, else the ends again:
-    /// the corners of the box each vertex must stay near
-    /// ([`SelfContactSolver::candidates_cover`]).
-    listed_start: Vec<Vec3>,
+    /// Where each vertex's sweep ended when the candidates were listed.
     listed_end: Vec<Vec3>,
     /// Whether the candidates serve while each vertex stays near the box of its whole
     /// listed sweep, not only near its end: where no sweep of the listing was longer than
-    /// the margin.
+    /// the margin ([`SelfContactSolver::candidates_cover`]).
     sweeps_listed: bool,
+    /// Where each sweep started then, kept only where the sweeps were listed.
+    listed_start: Vec<Vec3>,
     /// Whether some vertex was exempt (being untangled) when they were listed, which
     /// left its pairs out.
     listed_with_exemptions: bool,
@@ -392,7 +390,9 @@ impl SelfContactSolver {
         let sweeps = longest_sweep <= margin;
         self.sweeps_listed = sweeps;
         self.listed_start.clear();
-        self.listed_start.extend_from_slice(if sweeps { x0 } else { x1 });
+        if sweeps {
+            self.listed_start.extend_from_slice(x0);
+        }
         self.listed_end.clear();
         self.listed_end.extend_from_slice(x1);
         let (triangle_tree, edge_tree) = (&self.triangle_tree, &self.edge_tree);
@@ -476,13 +476,13 @@ impl SelfContactSolver {
             .map(|(now, listed)| (*now - *listed, *now - *listed))
             .reduce(|| (Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), (c, d)| (a.min(c), b.max(d)));
         let common = 0.5 * (low + high);
-        x1.par_iter().zip(&self.listed_start).zip(&self.listed_end).with_min_len(PARALLEL_MIN_LEN).all(
-            |((now, start), end)| {
-                let moved_back = *now - common;
-                let nearest = moved_back.clamp(start.min(*end), start.max(*end));
-                moved_back.distance_squared(nearest) < half_squared
-            },
-        )
+        // Where only the ends were listed, each vertex's box is its end alone.
+        let start = if self.sweeps_listed { &self.listed_start } else { &self.listed_end };
+        x1.par_iter().zip(start).zip(&self.listed_end).with_min_len(PARALLEL_MIN_LEN).all(|((now, start), end)| {
+            let moved_back = *now - common;
+            let nearest = moved_back.clamp(start.min(*end), start.max(*end));
+            moved_back.distance_squared(nearest) < half_squared
+        })
     }
 
     /// Lists in `hits` the candidate pairs whose paths from `x0` to `x1` touch. With
