@@ -223,13 +223,13 @@ fn self_contact_springs_are_made_over_when_the_frame_takes_another_number_of_ste
 }
 
 /// sphere_64_adaptive (the bench scene sphere_64 with its steps following the motion,
-/// `step_motion: 0.25`, solved by multigrid) rests without crossing itself or the bodies
-/// and, at one step a frame, without more strain than a particle that static friction
-/// holds for a frame while its neighbours slide gives: over its last 90 frames its most
-/// stretched edge stays below 9 % (0.052 from the bench's start; 0.046 to 0.108 from
-/// starts moved by 1 or 2 mm, with 0 to 41 of the 90 frames above 6 %). `min_substeps: 2`
-/// halves that hold: 0.048 here (0.045 to 0.069 from the moved starts, 0 to 19 frames
-/// above 6 %), at twice the steps a frame at rest. By block Jacobi at one step a frame it
+/// `step_motion: 0.25`, solved by multigrid) rests without crossing itself or the
+/// bodies, and over its last 90 frames no edge stretches past 9 %, though at one step a
+/// frame a particle that static friction holds on the ground is held for the whole frame
+/// while its neighbours slide: 0.052 from the bench's start (0.046 to 0.108 from starts
+/// moved by 1 or 2 mm, 0 to 41 of the 90 frames above 6 %). `min_substeps: 2` halves the
+/// hold: 0.048 here (0.045 to 0.069 from the moved starts, 0 to 19 frames above 6 %), at
+/// twice the steps a frame at rest. By block Jacobi at one step a frame it
 /// was 0.096 to 0.245, every frame of one run above 7 %; at the fixed ten steps of
 /// sphere_64, 0.023 to 0.060.
 #[test]
