@@ -11,9 +11,7 @@ use selvedge::Simulation;
 use selvedge::builders::ClothData;
 use selvedge::builders::grid::build_grid;
 use selvedge::collision::intersection::IntersectionCounter;
-use selvedge::components::{
-    BendingDesc, BendingLawDesc, ClothElements, ClothMaterial, ClothTopology, MembraneDesc, SolverParts,
-};
+use selvedge::components::{BendingDesc, BendingLawDesc, ClothMaterial, ClothTopology, MembraneDesc, SolverParts};
 use selvedge::scene::parse_scene;
 use selvedge::solver::descent::{DescentSettings, DescentWorkspace, descend};
 use selvedge::solver::elements::{SymmetricBlockMatrix, VelocityJacobian};
@@ -75,16 +73,8 @@ impl Sheet {
         };
         let mut cloth = build_grid((1.0, 1.0), (n, n), Affine3A::IDENTITY, &material);
         cloth.add_surface_elements(&material, Vec3::X).expect("a flat sheet");
-        let topology = ClothTopology::build(
-            &cloth.particles.inv_mass,
-            &cloth.springs,
-            &cloth.triangles,
-            &cloth.hinges,
-            &cloth.membranes,
-            &[],
-            1,
-            SolverParts::default(),
-        );
+        let topology =
+            ClothTopology::build(&cloth.particles.inv_mass, cloth.elements(), &[], 1, SolverParts::default());
         Self { cloth, topology }
     }
 
@@ -173,12 +163,7 @@ fn kernels(c: &mut Criterion) {
         // One V-cycle of the multigrid preconditioner on the same system (its levels
         // built once, outside the timing): with the product above, what an iteration of
         // the hang scenes' conjugate gradients costs.
-        let elements = ClothElements {
-            springs: &cloth.springs,
-            triangles: &cloth.triangles.indices,
-            hinges: &cloth.hinges,
-            membranes: &cloth.membranes,
-        };
+        let elements = cloth.elements();
         let hierarchy = topology.hierarchy(elements);
         let system_at = StepSystem::new(pattern, &system);
         let mut multigrid = Multigrid::default();

@@ -3,7 +3,7 @@
 use bevy_ecs::prelude::*;
 
 use crate::components::{
-    BendingHinges, ClothTopology, MembraneTriangles, Particles, Pins, SolverParts, Springs, Triangles,
+    BendingHinges, ClothElements, ClothTopology, MembraneTriangles, Particles, Pins, SolverParts, Springs, Triangles,
 };
 use crate::resources::SolverSettings;
 use crate::schedule::{FrameSystems, SimSchedules};
@@ -32,16 +32,8 @@ pub fn rebuild_cloth_topology(
     };
     for (particles, springs, triangles, hinges, membranes, pins, mut topology) in &mut cloths {
         let builds = topology.builds + 1;
-        *topology = ClothTopology::build(
-            &particles.inv_mass,
-            springs,
-            triangles,
-            hinges,
-            membranes,
-            &pins.particles,
-            builds,
-            parts,
-        );
+        let elements = ClothElements { springs, triangles: &triangles.indices, hinges, membranes };
+        *topology = ClothTopology::build(&particles.inv_mass, elements, &pins.particles, builds, parts);
     }
 }
 

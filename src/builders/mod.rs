@@ -12,7 +12,7 @@ use glam::{Affine3A, EulerRot, Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
 use crate::components::{
-    BendingHinges, ClothMaterial, MembraneTriangles, ParticleLayout, Particles, Springs, Triangles,
+    BendingHinges, ClothElements, ClothMaterial, MembraneTriangles, ParticleLayout, Particles, Springs, Triangles,
 };
 use crate::solver::ordering::{half_bandwidth, reverse_cuthill_mckee};
 
@@ -34,6 +34,16 @@ pub struct ClothData {
 }
 
 impl ClothData {
+    /// Its elements, what its topology is built from.
+    pub fn elements(&self) -> ClothElements<'_> {
+        ClothElements {
+            springs: &self.springs,
+            triangles: &self.triangles.indices,
+            hinges: &self.hinges,
+            membranes: &self.membranes,
+        }
+    }
+
     /// Renumbers the particles by reverse Cuthill–McKee so that particles that interact
     /// have close numbers (Bricis B8): the derivative blocks then sit near the diagonal and
     /// the solver's sweeps walk memory in order. For cloths built from meshes, whose file

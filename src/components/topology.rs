@@ -5,7 +5,7 @@ use std::sync::OnceLock;
 use bevy_ecs::prelude::*;
 use glam::Vec3;
 
-use super::{BendingHinges, MembraneTriangles, Springs, Triangles};
+use super::{BendingHinges, MembraneTriangles, Springs};
 use crate::collision::self_contact::ContactMesh;
 use crate::solver::descent::Colouring;
 use crate::solver::elements::{BlockPattern, ElementPositions};
@@ -125,21 +125,17 @@ pub struct ClothTopology {
 }
 
 impl ClothTopology {
-    /// Derives the topology of a cloth, with the `parts` its solver will use. `builds`
-    /// counts how often this was done.
-    #[allow(clippy::too_many_arguments)]
+    /// Derives the topology of a cloth of `elements`, with the `parts` its solver will use.
+    /// `builds` counts how often this was done.
     pub fn build(
         inv_mass: &[f32],
-        springs: &Springs,
-        triangles: &Triangles,
-        hinges: &BendingHinges,
-        membranes: &MembraneTriangles,
+        elements: ClothElements<'_>,
         pinned: &[u32],
         builds: u32,
         parts: SolverParts,
     ) -> Self {
         let count = inv_mass.len();
-        let elements = ClothElements { springs, triangles: &triangles.indices, hinges, membranes };
+        let ClothElements { springs, hinges, membranes, .. } = elements;
         let (whole, near) = elements.couplings(count);
         // Hinge forces and face blocks gathered from their angles, unless the bending is
         // quadratic, whose couplings across an edge are constant and kept apart.

@@ -822,18 +822,10 @@ mod tests {
                 );
                 *v = Vec3::new((f * 0.9).cos(), (f * 1.7).sin(), 0.5 * (f * 0.4).cos());
             }
+            let topology =
+                ClothTopology::build(&data.particles.inv_mass, data.elements(), &[], 1, SolverParts::default());
             let (particles, springs, triangles, hinges, membranes) =
                 (data.particles, data.springs, data.triangles, data.hinges, data.membranes);
-            let topology = ClothTopology::build(
-                &particles.inv_mass,
-                &springs,
-                &triangles,
-                &hinges,
-                &membranes,
-                &[],
-                1,
-                SolverParts::default(),
-            );
             Self { particles, springs, triangles, hinges, membranes, topology }
         }
 

@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 use selvedge::components::{
-    BendingHinges, ClothTopology, MembraneTriangles, SolverParts, SpringKind, Springs, Triangles,
+    BendingHinges, ClothElements, ClothTopology, MembraneTriangles, SolverParts, SpringKind, Springs, Triangles,
 };
 use selvedge::solver::forces::{Air, ClothDynamics, ForceModel, ForceScratch};
 use selvedge::solver::integrate::{Integrator, IntegratorWorkspace, MethodSettings, StepReport, step};
@@ -54,16 +54,9 @@ impl ParticleSystem {
         let inv_mass: Vec<f32> = masses.iter().map(|m| 1.0 / m).collect();
         let (triangles, hinges, membranes) =
             (Triangles::default(), BendingHinges::default(), MembraneTriangles::default());
-        let topology = ClothTopology::build(
-            &inv_mass,
-            &springs,
-            &triangles,
-            &hinges,
-            &membranes,
-            pinned,
-            1,
-            SolverParts::default(),
-        );
+        let elements =
+            ClothElements { springs: &springs, triangles: &triangles.indices, hinges: &hinges, membranes: &membranes };
+        let topology = ClothTopology::build(&inv_mass, elements, pinned, 1, SolverParts::default());
         Self { x, inv_mass, springs, gravity, topology, triangles, hinges, membranes }
     }
 
