@@ -149,6 +149,9 @@ pub struct ImplicitWorkspace {
     rhs: Vec<Vec3>,
     dv: Vec<Vec3>,
     delta: Vec<Vec3>,
+    /// The conjugate gradients' residual and search direction; between solves, the
+    /// scratch of the Newton iterations' damping change and of the contact springs' force
+    /// and stiffness product ([`add_springs`]), which no solve is reading then.
     residual: Vec<Vec3>,
     direction: Vec<Vec3>,
     /// The conjugate gradients' `A d`, then, once `r` is updated from it, the
