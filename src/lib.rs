@@ -18,6 +18,7 @@ pub mod collision;
 pub mod components;
 pub mod fabrics;
 pub mod io;
+pub mod memory;
 pub mod resources;
 pub mod scene;
 pub mod schedule;

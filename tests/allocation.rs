@@ -126,3 +126,22 @@ fn frames_whose_steps_follow_the_motion_allocate_nothing_once_warm() {
     assert!(common::probe(&sim, "contact_force_n") > 0.0, "the square lands in frame 14");
     assert!(landing <= 5, "contact beginning allocated {landing} times");
 }
+
+/// A large temporary list is given back shrunk in place to one element, then freed: the
+/// block freed is that element's, so glibc's mmap threshold, which a mapped block freed
+/// whole raises to its size, stays where it was (`selvedge::memory::release`).
+#[test]
+fn a_released_list_is_shrunk_in_place_then_freed_as_one_element() {
+    let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    for length in [1 << 20, 1] {
+        let list = vec![7u64; length];
+        let region = Region::new(GLOBAL);
+        selvedge::memory::release(list);
+        let change = region.change();
+        let shrunk = usize::from(length > 1);
+        assert_eq!(change.reallocations, shrunk, "{length} elements: shrunk in place once if there was room");
+        assert_eq!(change.bytes_reallocated, -(8 * (length as isize - 1)), "{length} elements");
+        // The shrink counts its bytes as deallocated too: the free is the one block left.
+        assert_eq!((change.deallocations, change.bytes_deallocated), (1, 8 * length), "{length} elements: one free");
+    }
+}

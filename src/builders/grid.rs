@@ -79,7 +79,7 @@ pub fn build_grid(
 
     let masses = lumped_masses(&positions, &triangles, material.density);
     ClothData {
-        particles: Particles::at_rest(positions, &masses),
+        particles: Particles::at_rest(positions, masses),
         springs,
         triangles: Triangles { indices: triangles },
         hinges: BendingHinges::default(),

@@ -11,6 +11,7 @@ use crate::components::{
     BendingHinges, ClothMaterial, MembraneTriangles, ParticleLayout, Particles, SpringCoefficients, SpringKind,
     Springs, Triangles,
 };
+use crate::memory::release;
 use crate::solver::geometry::{lumped_masses, triangle_area};
 
 /// A triangle mesh: vertex positions and counter-clockwise triangles.
@@ -155,16 +156,19 @@ pub fn build_from_mesh(
         triangles.iter().flat_map(|&[a, b, c]| [[a, b], [b, c], [c, a]]).map(|[i, j]| [i.min(j), i.max(j)]).collect();
     edges.sort_unstable();
     edges.dedup();
-    for [i, j] in edges {
+    for &[i, j] in &edges {
         add(i, j, material.stretch, SpringKind::Structural);
     }
-    for edge in interior_edges(&triangles) {
+    release(edges);
+    let interior = interior_edges(&triangles);
+    for edge in &interior {
         add(edge.o1, edge.o2, material.bend, SpringKind::Bend);
     }
+    release(interior);
 
     let masses = lumped_masses(&positions, &triangles, material.density);
     Ok(ClothData {
-        particles: Particles::at_rest(positions, &masses),
+        particles: Particles::at_rest(positions, masses),
         springs,
         triangles: Triangles { indices: triangles },
         hinges: BendingHinges::default(),

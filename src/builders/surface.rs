@@ -6,6 +6,7 @@ use glam::Vec3;
 use crate::components::{
     BendingDesc, BendingHinges, BendingLawDesc, MembraneDesc, MembraneTriangles, SpringKind, Springs,
 };
+use crate::memory::release;
 use crate::solver::elements::bending::quadratic_weights;
 use crate::solver::elements::hinge::hinge_angle;
 use crate::solver::elements::{
@@ -55,6 +56,7 @@ pub fn interior_edges(triangles: &[[u32; 3]]) -> Vec<InteriorEdge> {
         }
         start = end;
     }
+    release(directed);
     edges
 }
 
@@ -91,7 +93,7 @@ pub fn build_bending(
     result.vertices.reserve_exact(edges.len());
     result.rest_angle.reserve_exact(edges.len());
     result.faces.reserve_exact(triangles.len());
-    for edge in edges {
+    for edge in &edges {
         let h = result.vertices.len() as u32;
         let vertices = [edge.o1, edge.o2, edge.i, edge.j];
         result.vertices.push(vertices);
@@ -106,6 +108,7 @@ pub fn build_bending(
             }
         }
     }
+    release(edges);
     for (t, tri) in triangles.iter().enumerate() {
         let hinges = sides[t];
         if hinges.iter().all(|&h| h == NO_HINGE) {
@@ -148,6 +151,7 @@ pub fn build_bending(
             corners,
         });
     }
+    release(sides);
     if bending.law == BendingLawDesc::Quadratic {
         let weights: Vec<[f32; 4]> = result
             .vertices
@@ -169,7 +173,12 @@ pub fn build_bending(
         // The faces' constant Jacobian is all a step needs of them.
         let surface = BendingSurface { quadratic: &weights, ..result.view() };
         let quadratic = QuadraticBending::assemble(x, &surface, warp);
-        return Ok(BendingHinges { law, rigidity: result.rigidity, quadratic, ..BendingHinges::default() });
+        let BendingHinges { vertices, rest_angle, faces, rigidity, .. } = result;
+        release(vertices);
+        release(rest_angle);
+        release(faces);
+        release(weights);
+        return Ok(BendingHinges { law, rigidity, quadratic, ..BendingHinges::default() });
     }
     Ok(result)
 }

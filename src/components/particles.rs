@@ -22,12 +22,17 @@ pub struct Particles {
 }
 
 impl Particles {
-    /// Particles at rest at `positions` with the given masses [kg].
-    pub fn at_rest(positions: Vec<Vec3>, masses: &[f32]) -> Self {
+    /// Particles at rest at `positions` with the given masses [kg], which become their
+    /// inverse masses in place (a list freed here would be a large block freed:
+    /// [`crate::memory::release`]).
+    pub fn at_rest(positions: Vec<Vec3>, mut masses: Vec<f32>) -> Self {
         let count = positions.len();
+        for m in &mut masses {
+            *m = 1.0 / *m;
+        }
         Self {
             velocity: vec![Vec3::ZERO; count],
-            inv_mass: masses.iter().map(|m| 1.0 / m).collect(),
+            inv_mass: masses,
             rest_position: positions.clone(),
             force: vec![Vec3::ZERO; count],
             position: positions,

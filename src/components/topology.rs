@@ -7,6 +7,7 @@ use glam::Vec3;
 
 use super::{BendingHinges, MembraneTriangles, Springs};
 use crate::collision::self_contact::ContactMesh;
+use crate::memory::release;
 use crate::solver::descent::Colouring;
 use crate::solver::elements::{BlockPattern, ElementPositions};
 use crate::solver::forces::ForceScratch;
@@ -151,7 +152,7 @@ impl ClothTopology {
         for &p in pinned {
             free_inv_mass[p as usize] = 0.0;
         }
-        Self {
+        let topology = Self {
             particle_springs: Csr::from_items(count, &springs.pairs),
             particle_triangles: OnceLock::new(),
             edges: OnceLock::new(),
@@ -177,7 +178,10 @@ impl ClothTopology {
             pattern,
             free_inv_mass,
             builds,
-        }
+        };
+        whole.release();
+        near.release();
+        topology
     }
 
     /// The multigrid's levels over this topology, built at the first call from the cloth's
@@ -185,14 +189,23 @@ impl ClothTopology {
     pub fn hierarchy(&self, elements: ClothElements<'_>) -> &Hierarchy {
         self.hierarchy.get_or_init(|| {
             let (whole, near) = elements.couplings(self.free_inv_mass.len());
-            Hierarchy::build(&whole, &near, &self.pattern)
+            let hierarchy = Hierarchy::build(&whole, &near, &self.pattern);
+            whole.release();
+            near.release();
+            hierarchy
         })
     }
 
     /// The colouring of this topology's particles for block descent, found at the first
     /// call from the cloth's elements it was built from.
     pub fn colouring(&self, elements: ClothElements<'_>) -> &Colouring {
-        self.colouring.get_or_init(|| Colouring::greedy(&elements.couplings(self.free_inv_mass.len()).0))
+        self.colouring.get_or_init(|| {
+            let (whole, near) = elements.couplings(self.free_inv_mass.len());
+            let colouring = Colouring::greedy(&whole);
+            whole.release();
+            near.release();
+            colouring
+        })
     }
 
     /// The triangles of `triangles`, those this topology was built from, that touch each
@@ -252,6 +265,7 @@ impl ClothElements<'_> {
             count,
             springs_stencils().chain(self.triangles.iter().chain(&self.membranes.indices).map(|t| &t[..])),
         );
+        release(quadratic);
         (whole, near)
     }
 }

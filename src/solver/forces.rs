@@ -18,6 +18,7 @@ use super::reduce;
 use crate::collision::body_contact::ContactBody;
 use crate::collision::motion_bounds::Surface;
 use crate::components::{BendingHinges, ClothElements, ClothTopology, Csr, MembraneTriangles, Springs};
+use crate::memory::release;
 
 /// Air around the cloth.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -204,7 +205,9 @@ impl RowParts {
                 parts
             })
             .collect();
-        Csr::from_items(self.bounds.len() - 1, &parts)
+        let members = Csr::from_items(self.bounds.len() - 1, &parts);
+        release(parts);
+        members
     }
 }
 

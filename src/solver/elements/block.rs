@@ -8,6 +8,7 @@
 use glam::{Mat3, Mat3A, Vec3, Vec3A};
 use rayon::prelude::*;
 
+use crate::memory::release;
 use crate::solver::PARALLEL_MIN_LEN;
 
 /// `b v` with the block's columns in SIMD registers. glam's `Mat3 * Vec3` works on
@@ -101,7 +102,18 @@ impl BlockPattern {
             }
         }
         // Each row is taken as its turn comes, so the lists are freed as they go.
-        Self::from_rows(row_count, |i, row| *row = std::mem::take(&mut rows[i]))
+        let pattern = Self::from_rows(row_count, |i, row| *row = std::mem::take(&mut rows[i]));
+        release(rows);
+        pattern
+    }
+
+    /// Frees a pattern that was made for a while, its lists as [`release`] frees them.
+    pub fn release(self) {
+        let Self { offsets, columns, upper, mirrors, .. } = self;
+        release(offsets);
+        release(columns);
+        release(upper);
+        release(mirrors);
     }
 
     /// A pattern of `rows` rows, row `i` the sorted distinct columns that `fill(i, row)`

@@ -4,6 +4,8 @@
 
 use std::ops::Range;
 
+use crate::memory::release;
+
 /// Each row's columns, the rows' lists one after another (where each begins is kept
 /// beside, by the owner): as offsets `j − i` from row `i` where every one fits 16 bits,
 /// else as whole indices. On the 256² hang scene the quadratic bending's couplings lie
@@ -31,6 +33,7 @@ impl RowColumns {
         for r in 0..rows {
             near.extend(columns[range(r)].iter().map(|&c| offset(r, c).expect("checked to fit")));
         }
+        release(columns);
         Self { near, wide: Vec::new() }
     }
 
