@@ -20,11 +20,12 @@ pub fn count_self_intersections(x: &[Vec3], triangles: &[[u32; 3]]) -> usize {
 /// counts every frame.
 #[derive(Debug, Clone, Default)]
 pub struct IntersectionCounter {
-    /// Each triangle's bounding box (low and high corner), read for every candidate pair:
-    /// computed there each time, the count took 5.5 ms on a 128² sheet instead of 4.7.
-    boxes: Vec<(Vec3, Vec3)>,
+    /// Each triangle's bounding box in the grid's units ([`GridBox`]), read for every
+    /// candidate pair: computed there each time, the count took 5.5 ms on a 128² sheet
+    /// instead of 4.7.
+    boxes: Vec<GridBox>,
     /// The grid cell holding each triangle's bounding-box centre, as a key.
-    cells: Vec<u64>,
+    cells: Vec<u32>,
     /// The triangles, grouped by the hash bucket of their cell, in index order within a
     /// bucket.
     slots: Vec<u32>,
@@ -41,27 +42,28 @@ impl IntersectionCounter {
     /// The cells are hashed into a table twice as long as the triangle list. (A sweep
     /// along one axis met every box of a strip across the sheet, √n of them: 61 ms a
     /// count on a 256² sheet on two threads. A box tree finds as few candidates but cost
-    /// 260 bytes a particle of hang_64.)
+    /// 260 bytes a particle of hang_64.) The boxes are kept in the grid's units, rounded
+    /// outwards, and the cells' keys in 32 bits: 20 bytes a triangle where `f32` corners
+    /// and 64-bit keys took 32 (24 bytes a particle of a sheet).
     pub fn count(&mut self, x: &[Vec3], triangles: &[[u32; 3]]) -> usize {
         let Self { boxes, cells, slots, ends } = self;
-        triangles
-            .par_iter()
-            .with_min_len(PARALLEL_MIN_LEN)
-            .map(|triangle| {
-                let [a, b, c] = triangle.map(|p| x[p as usize]);
-                (a.min(b).min(c), a.max(b).max(c))
-            })
-            .collect_into_vec(boxes);
-        let bounds = |t: usize| boxes[t];
+        let bounds = |t: usize| {
+            let [a, b, c] = triangles[t].map(|p| x[p as usize]);
+            (a.min(b).min(c), a.max(b).max(c))
+        };
         let grid = Grid::around(triangles.len(), bounds);
+        boxes.resize(triangles.len(), GridBox::default());
         cells.resize(triangles.len(), 0);
-        cells.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(t, cell)| {
-            let (min, max) = bounds(t);
-            *cell = Grid::key(grid.cell(0.5 * (min + max)));
-        });
+        boxes.par_iter_mut().zip(cells.par_iter_mut()).with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(
+            |(t, (grid_box, cell))| {
+                let (min, max) = bounds(t);
+                *grid_box = grid.grid_box(min, max);
+                *cell = Grid::key(grid.cell(0.5 * (min + max)));
+            },
+        );
         // Counting sort by bucket, in index order within each.
         let buckets = (2 * triangles.len()).next_power_of_two();
-        let bucket = |key: u64| (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as usize & (buckets - 1);
+        let bucket = |key: u32| (u64::from(key).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as usize & (buckets - 1);
         ends.clear();
         ends.resize(buckets, 0);
         for &cell in cells.iter() {
@@ -77,13 +79,12 @@ impl IntersectionCounter {
             slots[*b as usize] = t as u32;
             *b += 1;
         }
-        let (cells, slots, ends) = (&*cells, &*slots, &*ends);
+        let (boxes, cells, slots, ends) = (&*boxes, &*cells, &*slots, &*ends);
         let corners = |tri: [u32; 3]| tri.map(|p| x[p as usize].as_dvec3());
         (0..triangles.len())
             .into_par_iter()
             .with_min_len(PARALLEL_MIN_LEN)
             .map(|t| {
-                let (min, max) = bounds(t);
                 let first = triangles[t];
                 let mut count = 0;
                 for neighbour in Grid::forward_neighbours(cells[t]) {
@@ -96,8 +97,7 @@ impl IntersectionCounter {
                         }
                         // Boxes that only touch are tested too: a triangle resting on
                         // another's plane touches it, which the test counts.
-                        let (other_min, other_max) = bounds(u);
-                        if other_min.cmpgt(max).any() || min.cmpgt(other_max).any() {
+                        if !boxes[t].meets(&boxes[u]) {
                             continue;
                         }
                         let second = triangles[u];
@@ -114,18 +114,46 @@ impl IntersectionCounter {
     }
 }
 
+/// A bounding box in a [`Grid`]'s units, [`Grid::UNITS`] across the span of all the
+/// boxes along each axis, its corners truncated to whole units: boxes that overlap or
+/// touch still do, and boxes less than a unit apart do too.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct GridBox {
+    low: [u16; 3],
+    high: [u16; 3],
+}
+
+impl GridBox {
+    /// Whether the boxes overlap or touch.
+    fn meets(&self, other: &GridBox) -> bool {
+        let [a0, a1, a2] = self.low;
+        let [b0, b1, b2] = other.high;
+        let [c0, c1, c2] = other.low;
+        let [d0, d1, d2] = self.high;
+        (a0 <= b0) & (a1 <= b1) & (a2 <= b2) & (c0 <= d0) & (c1 <= d1) & (c2 <= d2)
+    }
+}
+
 /// A uniform grid over a set of boxes, with cells a little wider than the widest box.
 struct Grid {
     /// The low corner of all the boxes [m].
     origin: Vec3,
     /// The inverse of the cells' width [1/m].
     inverse_width: f32,
+    /// A [`GridBox`]'s units a metre along each axis.
+    units: Vec3,
 }
 
 impl Grid {
     /// Cells a grid has at most along an axis, so that a cell's three coordinates pack
-    /// into a 64-bit key.
-    const CELLS: u32 = 1 << 21;
+    /// into a 32-bit key. A sheet of 256² particles a metre wide spans some 250 cells; a
+    /// cloth of more cells than this along an axis gets cells wider than its widest box,
+    /// each holding more triangles.
+    const CELLS: u32 = 1 << 10;
+
+    /// Units of a [`GridBox`] across the boxes' span along an axis: 16 bits' worth, less
+    /// a margin for the rounding at the far end. On a metre-wide sheet a unit is 15 µm.
+    const UNITS: f32 = 65_000.0;
 
     /// The grid over the `count` boxes `bounds(t)` (low and high corner).
     fn around(count: usize, bounds: impl Fn(usize) -> (Vec3, Vec3) + Sync) -> Self {
@@ -139,7 +167,8 @@ impl Grid {
         // narrower than the span allows, and of some width when every box is a point.
         let span = (high - low).max_element();
         let width = (1.001 * widest).max(span / (Self::CELLS - 2) as f32).max(f32::MIN_POSITIVE);
-        Self { origin: low, inverse_width: 1.0 / width }
+        let units = Vec3::splat(Self::UNITS) / (high - low).max(Vec3::splat(f32::MIN_POSITIVE));
+        Self { origin: low, inverse_width: 1.0 / width, units }
     }
 
     /// The coordinates of the cell holding point `p`.
@@ -147,25 +176,33 @@ impl Grid {
         ((p - self.origin) * self.inverse_width).to_array().map(|c| (c as u32).min(Self::CELLS - 1))
     }
 
+    /// The box from `min` to `max` in the grid's units.
+    fn grid_box(&self, min: Vec3, max: Vec3) -> GridBox {
+        // Rounding, each step of the scaling keeps the order of what it scales, and so
+        // does truncation (the conversion, which saturates at 0 and 2¹⁶ − 1): a corner at
+        // or beyond another is so in units too.
+        let units = |p: Vec3| ((p - self.origin) * self.units).to_array().map(|u| u as u16);
+        GridBox { low: units(min), high: units(max) }
+    }
+
     /// A cell's coordinates packed into one key.
-    fn key([i, j, k]: [u32; 3]) -> u64 {
-        (u64::from(i) << 42) | (u64::from(j) << 21) | u64::from(k)
+    fn key([i, j, k]: [u32; 3]) -> u32 {
+        (i << 20) | (j << 10) | k
     }
 
     /// The keys of the cell `key` and of the (up to 13) cells around it on one side of it,
     /// the side that the cells beyond, taking this one as their neighbour, do not see: a
     /// pair of neighbouring cells is visited from one of them.
-    fn forward_neighbours(key: u64) -> impl Iterator<Item = u64> {
-        let mask = u64::from(Self::CELLS - 1);
-        let centre = [key >> 42, (key >> 21) & mask, key & mask];
+    fn forward_neighbours(key: u32) -> impl Iterator<Item = u32> {
+        let mask = Self::CELLS - 1;
+        let centre = [key >> 20, (key >> 10) & mask, key & mask];
         // Offset n in base 3 is (i, j, k) + (n % 3, n / 3 % 3, n / 9) − 1: n = 13 is the
         // cell itself, and n and 26 − n are opposite.
-        (13..27u64).filter_map(move |n| {
+        (13..27u32).filter_map(move |n| {
             let mut cell = [0u32; 3];
             for (axis, c) in cell.iter_mut().enumerate() {
-                let step = (n / 3u64.pow(axis as u32)) % 3;
-                let coordinate = (centre[axis] + step).checked_sub(1)?;
-                *c = u32::try_from(coordinate).ok().filter(|&c| c < Self::CELLS)?;
+                let step = (n / 3u32.pow(axis as u32)) % 3;
+                *c = (centre[axis] + step).checked_sub(1).filter(|&c| c < Self::CELLS)?;
             }
             Some(Self::key(cell))
         })
@@ -281,6 +318,35 @@ mod tests {
             crossing += usize::from(crosses);
         }
         assert!(parted > 5_000 && crossing > 1_000, "{parted} pairs parted, {crossing} crossing");
+    }
+
+    /// Boxes in the grid's units meet wherever the boxes touch, whatever the scaling
+    /// rounds, and not where a few units part them: boxes of up to a centimetre scattered
+    /// over two metres, each with a neighbour whose low corner is its high corner along one
+    /// axis, and another three units beyond.
+    #[test]
+    fn grid_boxes_meet_where_boxes_touch_and_not_beyond() {
+        // Knuth's multiplicative hash: fixed, irregular numbers in [0, 1).
+        let scatter = |k: u32| (k.wrapping_mul(2_654_435_761) >> 8) as f32 / (1u32 << 24) as f32;
+        let point = |k: u32| Vec3::new(scatter(3 * k), scatter(3 * k + 1), scatter(3 * k + 2));
+        let boxes: Vec<(Vec3, Vec3)> = (0..1000).map(|k| (2.0 * point(2 * k) - 0.3, 0.01 * point(2 * k + 1))).collect();
+        // Over the neighbours too, as a count's grid is over every box it holds.
+        let grid = Grid::around(boxes.len(), |k| (boxes[k].0, boxes[k].0 + 0.05));
+        let unit = grid.units.recip();
+        let (mut met, mut parted) = (0, 0);
+        for (k, &(min, size)) in boxes.iter().enumerate() {
+            let max = min + size;
+            let axis = k % 3;
+            let along = Vec3::AXES[axis];
+            // The neighbour starts where this box ends along the axis, and shares its span
+            // across it.
+            let touching = (min + along * (max - min), max + along * size);
+            let apart = (touching.0 + 3.0 * along * unit, touching.1 + 3.0 * along * unit);
+            let this = grid.grid_box(min, max);
+            met += usize::from(this.meets(&grid.grid_box(touching.0, touching.1)));
+            parted += usize::from(!this.meets(&grid.grid_box(apart.0, apart.1)));
+        }
+        assert_eq!((met, parted), (boxes.len(), boxes.len()));
     }
 
     /// The grid finds every crossing pair that testing all pairs finds: in a sheet whose
