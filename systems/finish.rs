@@ -69,7 +69,7 @@ pub fn measure_probes(
         potential += model.potential_energy(&particles.position, forces);
         if !pins.is_empty() {
             let (x, v) = (&particles.position, &particles.velocity);
-            pin_force += pin_reaction(model.force_on(pins.particles.iter().copied(), x, v, environment.time(), forces));
+            pin_force += pin_reaction(model.pin_forces(x, v, environment.time(), forces));
         }
     }
     probes.set("kinetic_energy_j", kinetic);

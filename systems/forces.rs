@@ -81,7 +81,8 @@ impl ForceEnvironment<'_> {
 /// cloth touching nothing the force is left zero. A cloth touching a body is evaluated
 /// whole, and the implicit step takes that evaluation instead of making it again
 /// ([`SolverWorkspace::whole_start_force`]). Evaluated at the touching particles alone
-/// ([`ForceModel::force_on`]: serial, each element once for each of its particles there)
+/// (as [`ForceModel::pin_forces`] does for the pins: serial, each element once for each
+/// of its particles there)
 /// and again whole by the step, it cost sphere_64 some 10 ms a frame.
 pub fn accumulate_forces(
     environment: ForceEnvironment,

@@ -25,26 +25,51 @@ pub struct Csr {
     pub items: Vec<u32>,
 }
 
+/// The row of particle `p` in rows by particle: its own, none for the entry `u32::MAX`
+/// (an element's unused corner).
+fn own_row(p: u32) -> Option<u32> {
+    (p != u32::MAX).then_some(p)
+}
+
 impl Csr {
     /// Builds the rows of `row_count` particles from items that each touch a few
     /// particles; a row lists item indices.
     pub fn from_items<const N: usize>(row_count: usize, items: &[[u32; N]]) -> Self {
-        Self::build(row_count, items, |item, _| item)
+        Self::build(row_count, items, own_row, |item, _| item)
     }
 
     /// Like [`Csr::from_items`], but a row lists corners `item · N + slot`, so a gather
     /// can pick the force an element puts on that particle.
     pub fn from_corners<const N: usize>(row_count: usize, items: &[[u32; N]]) -> Self {
-        Self::build(row_count, items, |item, slot| item * N as u32 + slot)
+        Self::build(row_count, items, own_row, |item, slot| item * N as u32 + slot)
     }
 
-    /// Builds rows from items that each touch up to `N` rows; entries equal to
-    /// `u32::MAX` are skipped.
-    fn build<const N: usize>(row_count: usize, items: &[[u32; N]], entry: impl Fn(u32, u32) -> u32) -> Self {
+    /// For each of `rows` (particles, a particle listed twice making two rows), the
+    /// corners `N i + c` of the `items` at it, items in order: [`Csr::from_corners`] for
+    /// some particles only.
+    pub fn at_rows_of<const N: usize>(rows: &[u32], items: &[[u32; N]]) -> Self {
+        // The rows by particle, so that a corner finds its rows by a binary search.
+        let mut by_particle: Vec<u32> = (0..rows.len() as u32).collect();
+        by_particle.sort_by_key(|&r| rows[r as usize]);
+        let rows_at = |p: u32| {
+            let start = by_particle.partition_point(|&r| rows[r as usize] < p);
+            by_particle[start..].iter().copied().take_while(move |&r| rows[r as usize] == p)
+        };
+        Self::build(rows.len(), items, rows_at, |item, slot| item * N as u32 + slot)
+    }
+
+    /// Builds `row_count` rows from items that each touch up to `N` particles, an item's
+    /// particle `p` going to the rows `rows_at(p)`.
+    fn build<const N: usize, R: IntoIterator<Item = u32>>(
+        row_count: usize,
+        items: &[[u32; N]],
+        rows_at: impl Fn(u32) -> R,
+        entry: impl Fn(u32, u32) -> u32,
+    ) -> Self {
         let mut offsets = vec![0u32; row_count + 1];
-        for item in items {
-            for &p in item.iter().filter(|&&p| p != u32::MAX) {
-                offsets[p as usize + 1] += 1;
+        for &p in items.iter().flatten() {
+            for r in rows_at(p) {
+                offsets[r as usize + 1] += 1;
             }
         }
         for i in 0..row_count {
@@ -53,11 +78,14 @@ impl Csr {
         let mut fill = offsets.clone();
         let mut rows = vec![0u32; offsets[row_count] as usize];
         for (index, item) in items.iter().enumerate() {
-            for (slot, &p) in item.iter().enumerate().filter(|(_, p)| **p != u32::MAX) {
-                rows[fill[p as usize] as usize] = entry(index as u32, slot as u32);
-                fill[p as usize] += 1;
+            for (slot, &p) in item.iter().enumerate() {
+                for r in rows_at(p) {
+                    rows[fill[r as usize] as usize] = entry(index as u32, slot as u32);
+                    fill[r as usize] += 1;
+                }
             }
         }
+        release(fill);
         Self { offsets, items: rows }
     }
 
@@ -94,8 +122,12 @@ pub struct ClothTopology {
     /// Face sides `3 f + k` at each hinge: where a hinge's moment comes from; empty where
     /// the bending is quadratic.
     pub hinge_faces: Csr,
-    /// Membrane corners `3 t + c` at each particle.
-    pub particle_membranes: Csr,
+    /// The pinned particles, in the order the topology was given them.
+    pub pinned: Vec<u32>,
+    /// Membrane corners `3 t + c` at each of `pinned`, row by row: only the pins'
+    /// reaction asks for the membranes at a particle ([`crate::solver::forces::ForceModel::pin_forces`]),
+    /// and kept for every particle they were 28 bytes a particle.
+    pub pinned_membranes: Csr,
     /// Which 3×3 blocks the derivatives ∂f/∂x and ∂f/∂v have: every coupling, or under
     /// quadratic bending those within a spring or a triangle (its couplings across an
     /// edge are scalars, `ConstantCouplings`, found with its Jacobian).
@@ -166,7 +198,8 @@ impl ClothTopology {
                 }
                 false => Csr::default(),
             },
-            particle_membranes: Csr::from_corners(count, &membranes.indices),
+            pinned_membranes: Csr::at_rows_of(pinned, &membranes.indices),
+            pinned: pinned.to_vec(),
             spring_positions: ElementPositions::new(&pattern, springs.pairs.iter().copied()),
             face_positions: match by_angles {
                 true => ElementPositions::new(&pattern, hinges.faces.iter().map(|f| f.vertices)),

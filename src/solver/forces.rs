@@ -244,7 +244,7 @@ impl ElementForces for ForceScratch {
     }
 }
 
-/// Elements' forces computed one at a time when asked for ([`ForceModel::force_on`]).
+/// Elements' forces computed one at a time when asked for ([`ForceModel::pin_forces`]).
 struct LocalForces<'a> {
     model: &'a ForceModel<'a>,
     x: &'a [Vec3],
@@ -381,7 +381,7 @@ impl<'a> ForceModel<'a> {
     /// damping, springs and hinges, the elements' forces given by `elements` (see
     /// [`ElementForces`]). A particle's total adds its membranes' forces to it in the
     /// membranes' order, then the wind's ([`ForceModel::add_wind`]), user forces left
-    /// out: the order [`ForceModel::eval`] and [`ForceModel::force_on`] share, so that
+    /// out: the order [`ForceModel::eval`] and [`ForceModel::pin_forces`] share, so that
     /// both give the same bits.
     fn force_before_membranes(&self, i: usize, v: Vec3, rate: f32, elements: &impl ElementForces) -> Vec3 {
         let topology = self.topology;
@@ -438,25 +438,21 @@ impl<'a> ForceModel<'a> {
         membranes.element(m).forces(&membranes.material, membranes.indices[m].map(|p| x[p as usize]))
     }
 
-    /// The total force on each of `particles` at state `(x, v)` and time `t` [N], as
-    /// [`ForceModel::eval`] gives it, from their own elements alone: the pins' reaction
-    /// without evaluating the whole cloth. `scratch` takes the angles of the hinges whose
-    /// moments the particles' hinges need (those of their faces); the other hinges'
-    /// entries are left as they were, and not read.
-    pub fn force_on<'p, P>(
+    /// The total force on each pinned particle of the topology (`ClothTopology::pinned`,
+    /// in its order) at state `(x, v)` and time `t` [N], as [`ForceModel::eval`] gives it,
+    /// from their own elements alone: the pins' reaction without evaluating the whole
+    /// cloth. `scratch` takes the angles of the hinges whose moments the particles'
+    /// hinges need (those of their faces); the other hinges' entries are left as they
+    /// were, and not read.
+    pub fn pin_forces<'p>(
         &'p self,
-        particles: P,
         x: &'p [Vec3],
         v: &'p [Vec3],
         t: f32,
         scratch: &'p mut ForceScratch,
-    ) -> impl Iterator<Item = Vec3> + 'p
-    where
-        P: IntoIterator<Item = u32>,
-        P::IntoIter: Clone + 'p,
-    {
-        let particles = particles.into_iter();
+    ) -> impl Iterator<Item = Vec3> + 'p {
         let (bending, topology) = (self.hinges.view(), self.topology);
+        let particles = topology.pinned.iter().copied();
         let quadratic = self.hinges.is_quadratic();
         scratch.hinge_delta.resize(if quadratic { 0 } else { self.hinges.vertices.len() }, 0.0);
         for p in particles.clone().filter(|_| !quadratic) {
@@ -473,11 +469,11 @@ impl<'a> ForceModel<'a> {
         let blocks = &*blocks;
         let local = LocalForces { model: self, x, v, wind: self.air.wind_at(t), delta: hinge_delta };
         let rate = self.damping_rate();
-        particles.map(move |p| {
+        particles.enumerate().map(move |(row, p)| {
             let i = p as usize;
             let user = self.user_forces.iter().filter(|(q, _)| *q == p).map(|(_, f)| *f);
             let mut total = self.force_before_membranes(i, v[i], rate, &local);
-            for &corner in self.topology.particle_membranes.row(i) {
+            for &corner in topology.pinned_membranes.row(row) {
                 total += self.membrane_forces(corner as usize / 3, x)[corner as usize % 3];
             }
             if quadratic {
@@ -915,17 +911,18 @@ mod tests {
         }
     }
 
-    /// The force on a few particles from their own elements is bit for bit the force the
-    /// whole cloth's evaluation gives them, with every element kind, wind, gusts and user
-    /// forces (one particle pushed twice).
+    /// The force on a few pinned particles from their own elements is bit for bit the
+    /// force the whole cloth's evaluation gives them, with every element kind, wind, gusts
+    /// and user forces (one particle pushed twice), in the order they were pinned (one
+    /// pinned twice).
     #[test]
-    fn the_force_on_a_few_particles_matches_the_whole_evaluation() {
+    fn the_force_on_the_pinned_particles_matches_the_whole_evaluation() {
         for fixture in fixtures() {
-            force_on_matches_the_whole_evaluation(&fixture);
+            pin_forces_match_the_whole_evaluation(&fixture);
         }
     }
 
-    fn force_on_matches_the_whole_evaluation(fixture: &Fixture) {
+    fn pin_forces_match_the_whole_evaluation(fixture: &Fixture) {
         let user_forces = [(5, Vec3::new(0.1, 0.2, -0.3)), (9, Vec3::X), (5, Vec3::new(-0.02, 0.0, 0.7))];
         let air = Air {
             drag: 0.7,
@@ -934,16 +931,23 @@ mod tests {
             wind_drag: 0.6,
             gust: Some(Gust { amplitude: 0.4, period_s: 1.3 }),
         };
-        let model = fixture.model(air, &user_forces);
+        let chosen = [9, 0, 5, 6, 15, 5];
+        let pinned = ClothTopology::build(
+            &fixture.particles.inv_mass,
+            fixture.model(air, &user_forces).elements(),
+            &chosen,
+            1,
+            SolverParts::default(),
+        );
+        let model = ForceModel { topology: &pinned, ..fixture.model(air, &user_forces) };
         let (x, v) = (&fixture.particles.position, &fixture.particles.velocity);
         let mut whole = vec![Vec3::ZERO; x.len()];
         model.eval(x, v, 0.4, &mut ForceScratch::default(), &mut whole);
-        let chosen = [0, 5, 6, 9, 15];
         // The scratch holds another state's hinge angles, as between steps.
         let mut scratch = ForceScratch::default();
         let elsewhere: Vec<Vec3> = x.iter().map(|p| 1.1 * *p + Vec3::Y * p.x * p.z).collect();
         model.eval(&elsewhere, v, 0.4, &mut scratch, &mut vec![Vec3::ZERO; x.len()]);
-        let local: Vec<Vec3> = model.force_on(chosen.iter().copied(), x, v, 0.4, &mut scratch).collect();
+        let local: Vec<Vec3> = model.pin_forces(x, v, 0.4, &mut scratch).collect();
         let expected: Vec<Vec3> = chosen.iter().map(|&p| whole[p as usize]).collect();
         assert_eq!(local, expected);
         assert!(expected.iter().all(|f| f.length() > 0.0));
