@@ -169,7 +169,8 @@ impl ClothTopology {
     ) -> Self {
         let count = inv_mass.len();
         let ClothElements { springs, hinges, membranes, .. } = elements;
-        let (whole, near) = elements.couplings(count);
+        let couplings = elements.couplings(count);
+        let (whole, near) = (&couplings.whole, &couplings.near);
         // Hinge forces and face blocks gathered from their angles, unless the bending is
         // quadratic, whose couplings across an edge are constant and kept apart.
         let by_angles = !hinges.is_quadratic();
@@ -178,13 +179,13 @@ impl ClothTopology {
             false => near.clone().with_upper(),
         };
         // Made from the patterns at hand, not found again by the accessors.
-        let colouring = parts.colouring.then(|| Colouring::greedy(&whole));
-        let hierarchy = parts.hierarchy.then(|| Hierarchy::build(&whole, &near, &pattern));
+        let colouring = parts.colouring.then(|| Colouring::greedy(whole));
+        let hierarchy = parts.hierarchy.then(|| Hierarchy::build(whole, near, &pattern));
         let mut free_inv_mass = inv_mass.to_vec();
         for &p in pinned {
             free_inv_mass[p as usize] = 0.0;
         }
-        let topology = Self {
+        Self {
             particle_springs: Csr::from_items(count, &springs.pairs),
             particle_triangles: OnceLock::new(),
             edges: OnceLock::new(),
@@ -211,34 +212,22 @@ impl ClothTopology {
             pattern,
             free_inv_mass,
             builds,
-        };
-        whole.release();
-        near.release();
-        topology
+        }
     }
 
     /// The multigrid's levels over this topology, built at the first call from the cloth's
     /// elements it was built from.
     pub fn hierarchy(&self, elements: ClothElements<'_>) -> &Hierarchy {
         self.hierarchy.get_or_init(|| {
-            let (whole, near) = elements.couplings(self.free_inv_mass.len());
-            let hierarchy = Hierarchy::build(&whole, &near, &self.pattern);
-            whole.release();
-            near.release();
-            hierarchy
+            let couplings = elements.couplings(self.free_inv_mass.len());
+            Hierarchy::build(&couplings.whole, &couplings.near, &self.pattern)
         })
     }
 
     /// The colouring of this topology's particles for block descent, found at the first
     /// call from the cloth's elements it was built from.
     pub fn colouring(&self, elements: ClothElements<'_>) -> &Colouring {
-        self.colouring.get_or_init(|| {
-            let (whole, near) = elements.couplings(self.free_inv_mass.len());
-            let colouring = Colouring::greedy(&whole);
-            whole.release();
-            near.release();
-            colouring
-        })
+        self.colouring.get_or_init(|| Colouring::greedy(&elements.couplings(self.free_inv_mass.len()).whole))
     }
 
     /// The triangles of `triangles`, those this topology was built from, that touch each
@@ -281,10 +270,8 @@ pub struct ClothElements<'a> {
 }
 
 impl ClothElements<'_> {
-    /// The patterns of `count` particles' couplings: every one, the bending faces' across
-    /// an edge among them (under quadratic bending its pairs), and those of particles that
-    /// share a spring or a triangle (the multigrid's finest level's).
-    fn couplings(&self, count: usize) -> (BlockPattern, BlockPattern) {
+    /// The patterns of `count` particles' couplings.
+    fn couplings(&self, count: usize) -> Couplings {
         let springs_stencils = || self.springs.pairs.iter().map(|p| &p[..]);
         let quadratic: Vec<[u32; 2]> = self.hinges.quadratic.pairs().map(|(i, j, _)| [i, j]).collect();
         let whole = BlockPattern::from_stencils(
@@ -299,7 +286,25 @@ impl ClothElements<'_> {
             springs_stencils().chain(self.triangles.iter().chain(&self.membranes.indices).map(|t| &t[..])),
         );
         release(quadratic);
-        (whole, near)
+        Couplings { whole, near }
+    }
+}
+
+/// A cloth's coupling patterns, found for a while (by [`ClothTopology::build`] and the
+/// parts it builds on demand) and freed as [`release`] frees lists when dropped.
+struct Couplings {
+    /// Every coupling, the bending faces' across an edge among them (under quadratic
+    /// bending its pairs).
+    whole: BlockPattern,
+    /// Those of particles that share a spring or a triangle: the multigrid's finest
+    /// level's.
+    near: BlockPattern,
+}
+
+impl Drop for Couplings {
+    fn drop(&mut self) {
+        std::mem::take(&mut self.whole).release();
+        std::mem::take(&mut self.near).release();
     }
 }
 
