@@ -301,7 +301,11 @@ fn add_by_parts(
     bounds: &[usize],
     add: &(impl Fn(usize, std::ops::Range<usize>, &mut [Mat3], usize) + Sync),
 ) {
-    split_parts(&|row| offsets[row] as usize, blocks, bounds, 0, add);
+    let offset = |row: usize| offsets[row] as usize;
+    split_parts(RowStorage { offset: &offset, items: blocks }, bounds, 0, &|part, rows, blocks| {
+        let first = offset(rows.start);
+        add(part, rows, blocks.items, first);
+    });
 }
 
 /// Lets `work(part, rows, values)` work on each part of the rows, between consecutive
@@ -312,27 +316,56 @@ pub(crate) fn by_parts<T: Send>(
     bounds: &[usize],
     work: impl Fn(usize, std::ops::Range<usize>, &mut [T]) + Sync,
 ) {
-    split_parts(&|row| row, values, bounds, 0, &|part, rows, values, _| work(part, rows, values));
+    split_parts(RowStorage { offset: &|row| row, items: values }, bounds, 0, &|part, rows, values| {
+        work(part, rows, values.items);
+    });
+}
+
+/// What is kept for a range of rows, cut where a part of the rows begins.
+trait PartStorage: Send + Sized {
+    /// The storage of the rows before `at` and of those from it, this storage's rows
+    /// beginning at `start`.
+    fn cut(self, start: usize, at: usize) -> (Self, Self);
+}
+
+/// Items kept row by row, row `r`'s from `offset(r)` of the whole storage.
+struct RowStorage<'a, T, F> {
+    offset: &'a F,
+    items: &'a mut [T],
+}
+
+impl<T: Send, F: Fn(usize) -> usize + Sync> PartStorage for RowStorage<'_, T, F> {
+    fn cut(self, start: usize, at: usize) -> (Self, Self) {
+        let (low, high) = self.items.split_at_mut((self.offset)(at) - (self.offset)(start));
+        (Self { offset: self.offset, items: low }, Self { offset: self.offset, items: high })
+    }
+}
+
+/// Two storages of the same rows, cut together.
+impl<A: PartStorage, B: PartStorage> PartStorage for (A, B) {
+    fn cut(self, start: usize, at: usize) -> (Self, Self) {
+        let ((a_low, a_high), (b_low, b_high)) = (self.0.cut(start, at), self.1.cut(start, at));
+        ((a_low, b_low), (a_high, b_high))
+    }
 }
 
 /// [`add_by_parts`] for the parts from `first_part` on, at `bounds`, whose `items` begin
-/// at `offset` of the first bound's row.
-fn split_parts<T: Send>(
-    offset: &(impl Fn(usize) -> usize + Sync),
-    items: &mut [T],
+/// at the first bound's row.
+fn split_parts<S: PartStorage>(
+    items: S,
     bounds: &[usize],
     first_part: usize,
-    add: &(impl Fn(usize, std::ops::Range<usize>, &mut [T], usize) + Sync),
+    work: &(impl Fn(usize, std::ops::Range<usize>, S) + Sync),
 ) {
     match *bounds {
         [] | [_] => {}
-        [start, end] => add(first_part, start..end, items, offset(start)),
+        [start, end] => work(first_part, start..end, items),
         [start, ..] => {
             let middle = (bounds.len() - 1) / 2;
-            let (low, high) = items.split_at_mut(offset(bounds[middle]) - offset(start));
+            let (low, high) = items.cut(start, bounds[middle]);
             rayon::join(
-                || split_parts(offset, low, &bounds[..=middle], first_part, add),
-                || split_parts(offset, high, &bounds[middle..], first_part + middle, add),
+                || split_parts(low, &bounds[..=middle], first_part, work),
+                || split_parts(high, &bounds[middle..], first_part + middle, work),
             );
         }
     }
@@ -493,6 +526,26 @@ impl SymmetricBlockMatrix {
         add: impl Fn(usize, std::ops::Range<usize>, &mut [Mat3], usize) + Sync,
     ) {
         add_by_parts(&pattern.upper, &mut self.blocks, bounds, &add);
+    }
+
+    /// [`SymmetricBlockMatrix::add_by_parts`] with `values`, one per row, cut at the same
+    /// rows: `add(part, rows, blocks, first, values)` gets the part's values beside its
+    /// blocks, so that one pass over the elements adds both (the forces and the blocks of
+    /// an assembly).
+    pub fn add_by_parts_beside<T: Send>(
+        &mut self,
+        pattern: &BlockPattern,
+        bounds: &[usize],
+        values: &mut [T],
+        add: impl Fn(usize, std::ops::Range<usize>, &mut [Mat3], usize, &mut [T]) + Sync,
+    ) {
+        let offset = |row: usize| pattern.upper[row] as usize;
+        let storages =
+            (RowStorage { offset: &offset, items: &mut self.blocks }, RowStorage { offset: &|row| row, items: values });
+        split_parts(storages, bounds, 0, &|part, rows, (blocks, values)| {
+            let first = offset(rows.start);
+            add(part, rows, blocks.items, first, values.items);
+        });
     }
 
     /// Row `i` of the matrix times `x`: every block of the row in column order.

@@ -107,8 +107,31 @@ impl MembraneElement {
     /// Forces on the three vertices [N].
     pub fn forces(&self, material: &MembraneMaterial, x: [Vec3; 3]) -> [Vec3; 3] {
         let f = self.deformation(x);
+        self.forces_at(&f, Self::stress_at(material, &f))
+    }
+
+    /// [`MembraneElement::forces`] and [`MembraneElement::position_jacobian`] from one
+    /// deformation and stress, the same bits as each: what an implicit step's assembly
+    /// needs of every triangle.
+    pub fn forces_and_jacobian(
+        &self,
+        material: &MembraneMaterial,
+        x: [Vec3; 3],
+        definite: bool,
+    ) -> ([Vec3; 3], [Mat3; 6]) {
+        let f = self.deformation(x);
+        let stress = Self::stress_at(material, &f);
+        (self.forces_at(&f, stress), self.jacobian_at(material, &f, stress, definite))
+    }
+
+    /// The second Piola–Kirchhoff stress `(S₁₁, S₂₂, S₁₂)` at deformation `f`.
+    fn stress_at(material: &MembraneMaterial, f: &Deformation) -> (f32, f32, f32) {
         let (e11, e22, e12) = f.green_strain();
-        let (s11, s22, s12) = material.stress(e11, e22, e12);
+        material.stress(e11, e22, e12)
+    }
+
+    /// The forces at deformation `f` under `stress`.
+    fn forces_at(&self, f: &Deformation, (s11, s22, s12): (f32, f32, f32)) -> [Vec3; 3] {
         let p = [f.warp * s11 + f.weft * s12, f.warp * s12 + f.weft * s22];
         self.spread(p).map(|g| -g)
     }
@@ -131,8 +154,17 @@ impl MembraneElement {
     /// on and above the diagonal are formed, in [`upper_pairs`](super::block::upper_pairs) order.
     pub fn position_jacobian(&self, material: &MembraneMaterial, x: [Vec3; 3], definite: bool) -> [Mat3; 6] {
         let f = self.deformation(x);
-        let (e11, e22, e12) = f.green_strain();
-        let (s11, s22, s12) = material.stress(e11, e22, e12);
+        self.jacobian_at(material, &f, Self::stress_at(material, &f), definite)
+    }
+
+    /// The blocks at deformation `f` under `stress`.
+    fn jacobian_at(
+        &self,
+        material: &MembraneMaterial,
+        f: &Deformation,
+        (s11, s22, s12): (f32, f32, f32),
+        definite: bool,
+    ) -> [Mat3; 6] {
         let (g11, g22, g12) = if definite { positive_part(s11, s22, s12) } else { (s11, s22, s12) };
         let MembraneMaterial { d1, d2, d3, d4 } = *material;
         // F C Fᵀ = c₀₀ w wᵀ + c₀₁ w fᵀ + c₁₀ f wᵀ + c₁₁ f fᵀ, w and f the warp's and weft's images.
