@@ -542,7 +542,6 @@ impl<'a> ForceModel<'a> {
     /// own list, then quadratic bending's, then the wind's. A membrane beside a cut is
     /// computed by both parts; kept instead, the membranes' forces were 72 bytes a
     /// particle.
-    #[allow(clippy::too_many_arguments)]
     fn gather(
         &self,
         part: usize,
