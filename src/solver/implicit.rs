@@ -706,13 +706,15 @@ fn solve(
     }
     let (pattern, couplings, springs) =
         (dynamics.pattern(), dynamics.constant_couplings(), springs_of(settings, dynamics));
+    let at_rest = start == Start::Zero || (start == Start::Prescribed && ws.prescribed.is_empty());
     let iterations = match settings.linear_solver {
         LinearSolver::ConjugateGradient => {
-            conjugate_gradient(pattern, couplings, None, springs, settings, tolerance, x, ws)
+            conjugate_gradient(pattern, couplings, None, springs, settings, tolerance, x, at_rest, ws)
         }
         LinearSolver::Multigrid => {
             let hierarchy = Some(dynamics.hierarchy());
-            let iterations = conjugate_gradient(pattern, couplings, hierarchy, springs, settings, tolerance, x, ws);
+            let iterations =
+                conjugate_gradient(pattern, couplings, hierarchy, springs, settings, tolerance, x, at_rest, ws);
             // A looser solve's iterations say nothing of the levels' strength.
             if tolerance == settings.cg_tolerance {
                 ws.multigrid.record(iterations);
@@ -783,7 +785,8 @@ fn fused(
 /// the system matrix with the `springs`' off-diagonal blocks ([`multiply_system`]):
 /// `delta` starts as given and only moves within the filters. The preconditioner is a
 /// multigrid V-cycle over `hierarchy` if given, else block Jacobi; the system's constant
-/// `couplings` outside its pattern, if any, enter both and every product. Returns the
+/// `couplings` outside its pattern, if any, enter both and every product. A solve that
+/// starts `at_rest` (`delta` zero) takes its first residual without a product. Returns the
 /// iterations taken. Stops early on a direction of non-positive curvature, which a
 /// semi-definite assembly should not give. The vector work runs in parallel over fixed chunks of
 /// particles, each pass computing the dot products it needs on the way, summed in chunk
@@ -796,6 +799,7 @@ fn conjugate_gradient(
     settings: &ImplicitSettings,
     tolerance: f32,
     x: &[Vec3],
+    at_rest: bool,
     ws: &mut ImplicitWorkspace,
 ) -> u32 {
     const C: usize = VECTOR_CHUNK;
@@ -848,12 +852,20 @@ fn conjugate_gradient(
         })
     };
 
-    // r = S (b − A δ), z = M⁻¹ r, d = z.
-    multiply_system(system, springs, weights, delta, product);
-    let mut rr = fused(residual, product, partials, |i, r, q| {
-        *r = filter.apply(i, rhs[i] - q);
-        f64::from(r.length_squared())
-    });
+    // r = S (b − A δ), z = M⁻¹ r, d = z: from rest, r = S b, with no product of the
+    // matrix with zero (one in 13 of hang_256's, which start from rest every step).
+    let mut rr = if at_rest {
+        fused(residual, rhs, partials, |i, r, b| {
+            *r = filter.apply(i, b);
+            f64::from(r.length_squared())
+        })
+    } else {
+        multiply_system(system, springs, weights, delta, product);
+        fused(residual, product, partials, |i, r, q| {
+            *r = filter.apply(i, rhs[i] - q);
+            f64::from(r.length_squared())
+        })
+    };
     let mut rz = precondition(multigrid, residual, product, partials);
     direction.copy_from_slice(product);
     rhs.par_chunks(C)
