@@ -509,8 +509,8 @@ impl<'a> ForceModel<'a> {
         self.add_user_forces(out);
     }
 
-    /// The forces of the elements kept per element (springs, hinges, wind), and the parts
-    /// of the rows the forces are gathered by.
+    /// The forces of the elements kept per element (springs, hinges, wind), the parts of
+    /// the rows the forces are gathered by, and quadratic bending's constant blocks.
     fn element_forces(&self, x: &[Vec3], v: &[Vec3], t: f32, scratch: &mut ForceScratch) {
         scratch.spring.resize(self.springs.len(), Vec3::ZERO);
         scratch.spring.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(s, f)| {

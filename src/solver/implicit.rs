@@ -853,7 +853,7 @@ fn conjugate_gradient(
     };
 
     // r = S (b − A δ), z = M⁻¹ r, d = z: from rest, r = S b, with no product of the
-    // matrix with zero (one in 13 of hang_256's, which start from rest every step).
+    // matrix with zero (0.76 ms a frame of hang_256's, whose steps start from rest).
     let mut rr = if at_rest {
         fused(residual, rhs, partials, |i, r, b| {
             *r = filter.apply(i, b);
