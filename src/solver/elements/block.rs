@@ -880,6 +880,33 @@ mod tests {
         }
     }
 
+    /// With values beside the blocks, each part sees its own rows' values too, cut at the
+    /// same rows, with its own part number, wherever the splits fall.
+    #[test]
+    fn parts_see_their_own_rows_values_beside_their_blocks() {
+        let pattern = BlockPattern::from_stencils(4, [&[0u32, 1][..], &[1, 2][..], &[2, 3][..]]).with_upper();
+        for bounds in [vec![0, 4], vec![0, 1, 4], vec![0, 2, 3, 4], vec![0, 1, 2, 3, 4], vec![0, 0, 4, 4]] {
+            let mut m = SymmetricBlockMatrix::default();
+            m.reset(&pattern);
+            let mut values = vec![usize::MAX; pattern.rows()];
+            m.add_by_parts_beside(&pattern, &bounds, &mut values, |part, rows, blocks, first, values| {
+                assert_eq!((rows.len(), pattern.upper[rows.start] as usize), (values.len(), first));
+                for (row, value) in rows.clone().zip(values.iter_mut()) {
+                    *value = 100 * part + row;
+                    for slot in pattern.upper[row] as usize..pattern.upper[row + 1] as usize {
+                        blocks[slot - first] += Mat3::from_diagonal(Vec3::splat(slot as f32));
+                    }
+                }
+            });
+            let part_of = |row: usize| bounds.partition_point(|&b| b <= row) - 1;
+            let expected: Vec<usize> = (0..pattern.rows()).map(|row| 100 * part_of(row) + row).collect();
+            assert_eq!(values, expected, "bounds {bounds:?}");
+            for (slot, block) in m.blocks.iter().enumerate() {
+                assert_eq!(*block, Mat3::from_diagonal(Vec3::splat(slot as f32)), "bounds {bounds:?}, slot {slot}");
+            }
+        }
+    }
+
     /// The diagonal-only velocity Jacobian multiplies, reads and combines as the full one
     /// holding the same diagonal does.
     #[test]
