@@ -55,6 +55,7 @@ use super::implicit::StepSystem;
 use super::pipeline::pipelined;
 use super::{PARALLEL_MIN_LEN, add_rows};
 use crate::components::Csr;
+use crate::memory::release;
 
 /// Levels stop coarsening at this many nodes; the coarsest system is then factored
 /// densely (3 × 48 unknowns: a few hundred thousand flops).
@@ -203,6 +204,7 @@ impl Hierarchy {
             let slot_columns: Vec<[u32; 1]> = prolongation.columns.iter().map(|&c| [c]).collect();
             // `P` by columns: for coarse node `c`, the rows of `P` with a block in column `c`.
             let by_columns = Csr::from_items(count, &slot_columns);
+            release(slot_columns);
             let rows_of: Vec<u32> = by_columns.items.iter().map(|&s| prolongation.row_of(s as usize) as u32).collect();
             let coarse = BlockPattern::from_rows(count, |c, row| {
                 for &fine in &rows_of[by_columns.range(c)] {
@@ -260,10 +262,18 @@ enum Restriction {
 impl Restriction {
     /// The restriction of `p`, whose columns `count` coarse nodes, given `p`'s slots by
     /// columns and each one's row.
+    /// The lists it does not keep, a slot each of a large `P`, are released
+    /// ([`release`]).
     fn new(p: &BlockPattern, count: usize, slots: Csr, rows: Vec<u32>) -> Self {
         match p.rows() < RESTRICT_BY_ROWS {
             true => Self::ByColumns { slots, rows },
-            false => Self::by_rows(p, count),
+            false => {
+                let Csr { offsets, items } = slots;
+                release(offsets);
+                release(items);
+                release(rows);
+                Self::by_rows(p, count)
+            }
         }
     }
 
