@@ -32,6 +32,14 @@ fn own_row(p: u32) -> Option<u32> {
 }
 
 impl Csr {
+    /// Frees lists that were made for a while, as [`release`] frees them (as
+    /// `BlockPattern::release` does a pattern's).
+    pub fn release(self) {
+        let Self { offsets, items } = self;
+        release(offsets);
+        release(items);
+    }
+
     /// Builds the rows of `row_count` particles from items that each touch a few
     /// particles; a row lists item indices.
     pub fn from_items<const N: usize>(row_count: usize, items: &[[u32; N]]) -> Self {

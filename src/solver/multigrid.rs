@@ -262,15 +262,14 @@ enum Restriction {
 impl Restriction {
     /// The restriction of `p`, whose columns `count` coarse nodes, given `p`'s slots by
     /// columns and each one's row.
+    ///
     /// The lists it does not keep, a slot each of a large `P`, are released
     /// ([`release`]).
     fn new(p: &BlockPattern, count: usize, slots: Csr, rows: Vec<u32>) -> Self {
         match p.rows() < RESTRICT_BY_ROWS {
             true => Self::ByColumns { slots, rows },
             false => {
-                let Csr { offsets, items } = slots;
-                release(offsets);
-                release(items);
+                slots.release();
                 release(rows);
                 Self::by_rows(p, count)
             }
