@@ -223,40 +223,58 @@ fn self_contact_springs_are_made_over_when_the_frame_takes_another_number_of_ste
 }
 
 /// sphere_64_adaptive (the bench scene sphere_64 with its steps following the motion,
-/// `step_motion: 0.25`, solved by multigrid) rests without crossing itself or the
-/// bodies, and over its last 90 frames no edge stretches past 9 %, though at one step a
-/// frame a particle that static friction holds on the ground is held for the whole frame
-/// while its neighbours slide: 0.052 from the bench's start (0.046 to 0.108 from starts
-/// moved by 1 or 2 mm, 0 to 41 of the 90 frames above 6 %). `min_substeps: 2` halves the
-/// hold: 0.048 here (0.045 to 0.069 from the moved starts, 0 to 19 frames above 6 %), at
-/// twice the steps a frame at rest. By block Jacobi at one step a frame it
-/// was 0.096 to 0.245, every frame of one run above 7 %; at the fixed ten steps of
-/// sphere_64, 0.023 to 0.060.
+/// `step_motion: 0.25`, solved by multigrid) rests without crossing itself or the bodies,
+/// and without a lasting strain. Its rest is chaotic, so the strain is judged by the
+/// median of three starts (the bench's and 1 mm lower and higher), not by one. At one
+/// step a frame a particle that static friction holds on the ground is held for the
+/// whole frame while its neighbours slide, and the worst edge of that frame stretches:
+/// over the last 90 frames of fifteen starts 0.5 mm apart (28 November 2026) the worst
+/// frame's strain was 0.035 to 0.518 (above 0.15 in one start: a single frame) and the
+/// median frame's 0.026 to 0.081 (above 0.06 in one). `min_substeps: 2` halves the
+/// hold: the worst 0.045 to 0.100 (above 0.08 in one), the median 0.025 to 0.066. A
+/// start's numbers move with any change of rounding as much as with its start: the
+/// bench's own start gave 0.052 at one step, where eight of the fifteen passed 0.09.
 #[test]
 fn sphere_64_rests_at_one_step_a_frame_or_more_without_crossing_or_a_lasting_strain() {
-    for least in [1, 2] {
-        let mut sim = common::bundled_with("bench/sphere_64_adaptive.ron", |scene| {
-            scene.solver.min_substeps = (least > 1).then_some(least);
-        });
-        let mut worst_at_rest: f64 = 0.0;
-        for frame in 0..180 {
-            common::run_frames(&mut sim, 1);
-            assert_eq!(
-                common::probe(&sim, "self_intersections"),
-                0.0,
-                "{least}: frame {frame}: the sheet crosses itself"
-            );
-            let depth = common::probe(&sim, "max_penetration_m");
-            assert!(depth < 1e-3, "{least}: frame {frame}: {depth} m into a body, more than the cloth's thickness");
-            if frame >= 90 {
-                worst_at_rest = worst_at_rest.max(common::probe(&sim, "max_strain"));
+    for (least, worst_bound) in [(1, 0.15), (2, 0.08)] {
+        let (mut typical, mut worst) = (Vec::new(), Vec::new());
+        for height in [0.549, 0.55, 0.551] {
+            let mut sim = common::bundled_with("bench/sphere_64_adaptive.ron", |scene| {
+                scene.solver.min_substeps = (least > 1).then_some(least);
+                scene.cloths[0].placement.translation.y = height;
+            });
+            let mut at_rest = Vec::with_capacity(90);
+            for frame in 0..180 {
+                common::run_frames(&mut sim, 1);
+                assert_eq!(
+                    common::probe(&sim, "self_intersections"),
+                    0.0,
+                    "{least}, {height} m: frame {frame}: the sheet crosses itself"
+                );
+                let depth = common::probe(&sim, "max_penetration_m");
+                assert!(
+                    depth < 1e-3,
+                    "{least}, {height} m: frame {frame}: {depth} m into a body, more than the cloth's thickness"
+                );
+                if frame >= 90 {
+                    at_rest.push(common::probe(&sim, "max_strain"));
+                }
             }
+            let steps = sim.clock().step;
+            assert!(
+                (180 * u64::from(least)..1800).contains(&steps),
+                "{least}, {height} m: {steps} steps: at least {least} a frame and fewer than the fixed ten"
+            );
+            at_rest.sort_by(f64::total_cmp);
+            typical.push((at_rest[44] + at_rest[45]) / 2.0);
+            worst.push(at_rest[89]);
         }
-        let steps = sim.clock().step;
-        assert!(
-            (180 * u64::from(least)..1800).contains(&steps),
-            "{least}: {steps} steps: at least {least} a frame and fewer than the fixed ten"
-        );
-        assert!(worst_at_rest < 0.09, "{least}: the sheet at rest strains to {worst_at_rest}");
+        let median = |mut runs: Vec<f64>| {
+            runs.sort_by(f64::total_cmp);
+            runs[1]
+        };
+        let (typical, worst) = (median(typical), median(worst));
+        assert!(typical < 0.06, "{least}: the sheet at rest strains to {typical} in its median frame");
+        assert!(worst < worst_bound, "{least}: the sheet at rest strains to {worst} in its worst frame");
     }
 }
