@@ -228,7 +228,7 @@ fn self_contact_springs_are_made_over_when_the_frame_takes_another_number_of_ste
 /// median of three starts (the bench's and 1 mm lower and higher), not by one. At one
 /// step a frame a particle that static friction holds on the ground is held for the
 /// whole frame while its neighbours slide, and the worst edge of that frame stretches:
-/// over the last 90 frames of fifteen starts 0.5 mm apart (28 November 2026) the worst
+/// over the last 90 frames of fifteen starts within 4.5 mm (28 November 2026) the worst
 /// frame's strain was 0.035 to 0.518 (above 0.15 in one start: a single frame) and the
 /// median frame's 0.026 to 0.081 (above 0.06 in one). `min_substeps: 2` halves the
 /// hold: the worst 0.045 to 0.100 (above 0.08 in one), the median 0.025 to 0.066. A
