@@ -48,7 +48,7 @@ use rayon::prelude::*;
 
 use super::elements::block::{block_product, by_parts, times};
 use super::elements::half::row_product;
-use super::elements::spring::{outer, skew};
+use super::elements::spring::outer;
 use super::elements::{BlockPattern, HalfBlock, StoredBlock, SymmetricBlockMatrix, WeightedCouplings};
 use super::filter::{Filters, filtered_inverse};
 use super::implicit::StepSystem;
@@ -644,11 +644,10 @@ pub struct Multigrid {
     /// Matrices of the levels below the finest (whose matrix is `fine`), stored on and
     /// above their diagonals.
     matrices: Vec<SymmetricBlockMatrix>,
-    /// Scratch of the levels' setup, one level at a time: per node, the rotation block of
-    /// the filtered tentative prolongator `S P₀` ([`Level::prolongator`]), then two chunks
-    /// of [`PRODUCT_ROWS`] rows of `A S P` ([`Level::galerkin`]). Kept per level, the two
-    /// were 190 bytes a particle of the 64² hang scene, and the translation blocks beside
-    /// the rotations (they are `S` itself) 36 more.
+    /// Scratch of the levels' setup, one level at a time: two chunks of [`PRODUCT_ROWS`]
+    /// rows of `A S P` ([`Level::galerkin`]). It held the rotation blocks of the filtered
+    /// tentative prolongator `S P₀` too, a block a particle, until they were formed where
+    /// they are used ([`Rigid::rotation`]).
     blocks: Vec<Mat3>,
     /// The coarsest level's direct solver.
     coarsest: CoarsestSolver,
@@ -719,22 +718,55 @@ impl Rigid<'_> {
         }
     }
 
+    /// Whether [`Rigid::translation`] of `node` is the identity: a free particle, or a
+    /// pair's translation node.
+    #[inline]
+    fn moves_freely(&self, a: Operator, node: usize) -> bool {
+        match self.coarsening.paired {
+            true => node.is_multiple_of(2),
+            false => a.filter.is_none_or(|filter| filter.is_free(node)),
+        }
+    }
+
+    /// Block `(node, 2J + 1)` of `P₀`, `J` the node's aggregate: how the aggregate's turn
+    /// moves the node. A point `p` of aggregate `J` (centre `c`, frame `B`) moves by
+    /// `B a × (p − c)` under `2J + 1`, each column of the block a cross product; a rotation
+    /// node below the finest level turns by its own frame's share of `B a`.
+    #[inline]
+    fn turn(&self, node: usize) -> Mat3 {
+        let (point, aggregate) = (self.point(node), self.aggregate(node) as usize);
+        let frame = self.frames[aggregate];
+        match self.coarsening.paired && node % 2 == 1 {
+            false => {
+                let r = self.centres[aggregate] - self.points.position[point];
+                Mat3::from_cols(r.cross(frame.x_axis), r.cross(frame.y_axis), r.cross(frame.z_axis))
+            }
+            true => self.points.frame.map_or(Mat3::ZERO, |own| own[point].transpose() * frame),
+        }
+    }
+
+    /// Block `(node, 2J + 1)` of `S P₀`: [`Rigid::turn`] filtered, formed wherever the
+    /// prolongator's product uses it, some seven times a node. Kept per node instead,
+    /// these blocks were 36 bytes a particle, for about 1 ms a frame less of hang_256's
+    /// preparation.
+    #[inline]
+    fn rotation(&self, a: Operator, node: usize) -> Mat3 {
+        let turn = self.turn(node);
+        a.filter.filter(|filter| !filter.is_free(node)).map_or(turn, |filter| filter.block(node) * turn)
+    }
+
     /// Block `(node, column)` of `P₀`, `None` where the node is not in the column's
-    /// aggregate. A point `p` of aggregate `J` (centre `c`, frame `B`) moves by `t` under
-    /// node `2J` and by `B a × (p − c)` under `2J + 1`; a rotation node below the finest
-    /// level turns by its own frame's share of `B a`.
+    /// aggregate: under node `2J` a point moves by the aggregate's translation, a rotation
+    /// node below the finest level not at all.
+    #[cfg(test)]
     fn block(&self, node: usize, column: u32) -> Option<Mat3> {
-        let (point, aggregate) = (self.point(node), self.aggregate(node));
-        if column / 2 != aggregate {
+        if column / 2 != self.aggregate(node) {
             return None;
         }
-        let rotation = column % 2 == 1;
-        let (centre, frame) = (self.centres[aggregate as usize], self.frames[aggregate as usize]);
-        Some(match (self.coarsening.paired && node % 2 == 1, rotation) {
+        Some(match (column % 2 == 1, self.coarsening.paired && node % 2 == 1) {
+            (true, _) => self.turn(node),
             (false, false) => Mat3::IDENTITY,
-            (false, true) => skew(centre - self.points.position[point]) * frame,
-            (true, false) => Mat3::ZERO,
-            (true, true) => self.points.frame.map_or(Mat3::ZERO, |own| own[point].transpose() * frame),
+            (false, true) => Mat3::ZERO,
         })
     }
 }
@@ -1127,26 +1159,17 @@ impl Level {
     /// `D⁻¹` couples them, so a pair's rows are formed together. Row `i` of `A S P₀` is
     /// one walk of `A`'s row: a node `k` reaches the two columns of its own aggregate.
     ///
-    /// The rotation blocks of `S P₀` are formed first, into `rotations`, once per node
-    /// rather than once for each of the node's neighbours, which took half of the
-    /// prolongator's time; its translation blocks are `S` itself ([`Rigid::translation`]).
+    /// The blocks of `S P₀` are formed where they are used: its translation blocks are `S`
+    /// itself ([`Rigid::translation`]), its rotation blocks three cross products
+    /// ([`Rigid::rotation`]).
     /// On a level of [`HALF_ROWS`] rows or more, each group of rows is formed in `f32`
     /// ([`FORMING`]) and kept rounded to bfloat16.
-    fn prolongator(&mut self, a: Operator, coarsening: &Coarsening, points: Points, rotations: &mut Vec<Mat3>) {
+    fn prolongator(&mut self, a: Operator, coarsening: &Coarsening, points: Points) {
         let Level { inverse, weight, centres, frames, prolongation, .. } = self;
         let (weight, rigid) = (*weight, Rigid { coarsening, points, centres, frames });
         let size = if coarsening.paired { 2 } else { 1 };
-        (0..a.pattern.rows())
-            .into_par_iter()
-            .with_min_len(PARALLEL_MIN_LEN)
-            .map(|node| {
-                let rotation = 2 * rigid.aggregate(node) + 1;
-                rigid.block(node, rotation).map_or(Mat3::ZERO, |block| a.filter(node) * block)
-            })
-            .collect_into_vec(rotations);
-        let rotations = &*rotations;
         // Node `i`'s blocks of `S P₀` in its aggregate's two columns, its only ones.
-        let tentative = |i: usize| [rigid.translation(a, i), rotations[i]];
+        let tentative = |i: usize| [rigid.translation(a, i), rigid.rotation(a, i)];
         // Row `i` of `A S P₀` into `pushed`, the blocks of `columns`.
         let push = |i: usize, columns: &[u32], pushed: &mut [Mat3]| {
             pushed.fill(Mat3::ZERO);
@@ -1154,9 +1177,12 @@ impl Level {
                 let node = node as usize;
                 let translation = 2 * rigid.aggregate(node);
                 let Ok(at) = columns.binary_search(&translation) else { return };
-                for (out, block) in pushed[at..at + 2].iter_mut().zip(tentative(node)) {
-                    *out += block_product(&a_ik, &block);
-                }
+                // A free particle's translation block is the identity: `A_ik` itself.
+                pushed[at] += match rigid.moves_freely(a, node) {
+                    true => a_ik,
+                    false => block_product(&a_ik, &rigid.translation(a, node)),
+                };
+                pushed[at + 1] += block_product(&a_ik, &rigid.rotation(a, node));
             });
         };
         // The rows of `S P` in a group, given that group's rows of `A S P₀` (`pushed`
@@ -1460,7 +1486,7 @@ impl Multigrid {
                     Some(finer) => Points { position: &finer.centres, frame: Some(&finer.frames) },
                 };
                 level.rigid_motions(coarsening, points);
-                level.prolongator(a, coarsening, points, &mut self.blocks);
+                level.prolongator(a, coarsening, points);
             }
             level.galerkin(a, coarsening, &mut below[0], &mut self.blocks);
             let coarse = coarsening.coarse.rows();
