@@ -19,6 +19,7 @@ pub mod pipeline;
 pub mod probes;
 pub mod reduce;
 pub mod strain_limit;
+pub mod warm_start;
 
 use glam::Vec3;
 use rayon::prelude::*;
