@@ -48,7 +48,7 @@ use rayon::prelude::*;
 
 use super::elements::block::{block_product, by_parts, times};
 use super::elements::half::row_product;
-use super::elements::spring::outer;
+use super::elements::spring::{outer, skew};
 use super::elements::{BlockPattern, HalfBlock, StoredBlock, SymmetricBlockMatrix, WeightedCouplings};
 use super::filter::{Filters, filtered_inverse};
 use super::implicit::StepSystem;
@@ -710,37 +710,26 @@ impl Rigid<'_> {
 
     /// Block `(node, 2J)` of `S P₀` (`J` its aggregate), the filtered [`Rigid::block`] of
     /// the aggregate's translation: `S` on the finest level, and below it the identity on
-    /// a pair's translation node and zero on its rotation node.
-    fn translation(&self, a: Operator, node: usize) -> Mat3 {
-        match self.coarsening.paired && node % 2 == 1 {
-            true => Mat3::ZERO,
-            false => a.filter(node),
-        }
-    }
-
-    /// Whether [`Rigid::translation`] of `node` is the identity: a free particle, or a
-    /// pair's translation node.
-    #[inline]
-    fn moves_freely(&self, a: Operator, node: usize) -> bool {
+    /// a pair's translation node and zero on its rotation node. `None` where it is the
+    /// identity (a free particle, a pair's translation node), so that a product with it
+    /// can be skipped.
+    fn translation(&self, a: Operator, node: usize) -> Option<Mat3> {
         match self.coarsening.paired {
-            true => node.is_multiple_of(2),
-            false => a.filter.is_none_or(|filter| filter.is_free(node)),
+            true => (node % 2 == 1).then_some(Mat3::ZERO),
+            false => a.filter.filter(|filter| !filter.is_free(node)).map(|filter| filter.block(node)),
         }
     }
 
     /// Block `(node, 2J + 1)` of `P₀`, `J` the node's aggregate: how the aggregate's turn
     /// moves the node. A point `p` of aggregate `J` (centre `c`, frame `B`) moves by
-    /// `B a × (p − c)` under `2J + 1`, each column of the block a cross product; a rotation
+    /// `B a × (p − c)` under `2J + 1`; a rotation
     /// node below the finest level turns by its own frame's share of `B a`.
     #[inline]
     fn turn(&self, node: usize) -> Mat3 {
         let (point, aggregate) = (self.point(node), self.aggregate(node) as usize);
         let frame = self.frames[aggregate];
         match self.coarsening.paired && node % 2 == 1 {
-            false => {
-                let r = self.centres[aggregate] - self.points.position[point];
-                Mat3::from_cols(r.cross(frame.x_axis), r.cross(frame.y_axis), r.cross(frame.z_axis))
-            }
+            false => skew(self.centres[aggregate] - self.points.position[point]) * frame,
             true => self.points.frame.map_or(Mat3::ZERO, |own| own[point].transpose() * frame),
         }
     }
@@ -1160,8 +1149,8 @@ impl Level {
     /// one walk of `A`'s row: a node `k` reaches the two columns of its own aggregate.
     ///
     /// The blocks of `S P₀` are formed where they are used: its translation blocks are `S`
-    /// itself ([`Rigid::translation`]), its rotation blocks three cross products
-    /// ([`Rigid::rotation`]).
+    /// itself ([`Rigid::translation`]), its rotation blocks a cross-product matrix times the
+    /// aggregate's frame ([`Rigid::rotation`]).
     /// On a level of [`HALF_ROWS`] rows or more, each group of rows is formed in `f32`
     /// ([`FORMING`]) and kept rounded to bfloat16.
     fn prolongator(&mut self, a: Operator, coarsening: &Coarsening, points: Points) {
@@ -1169,7 +1158,7 @@ impl Level {
         let (weight, rigid) = (*weight, Rigid { coarsening, points, centres, frames });
         let size = if coarsening.paired { 2 } else { 1 };
         // Node `i`'s blocks of `S P₀` in its aggregate's two columns, its only ones.
-        let tentative = |i: usize| [rigid.translation(a, i), rigid.rotation(a, i)];
+        let tentative = |i: usize| [rigid.translation(a, i).unwrap_or(Mat3::IDENTITY), rigid.rotation(a, i)];
         // Row `i` of `A S P₀` into `pushed`, the blocks of `columns`.
         let push = |i: usize, columns: &[u32], pushed: &mut [Mat3]| {
             pushed.fill(Mat3::ZERO);
@@ -1177,11 +1166,7 @@ impl Level {
                 let node = node as usize;
                 let translation = 2 * rigid.aggregate(node);
                 let Ok(at) = columns.binary_search(&translation) else { return };
-                // A free particle's translation block is the identity: `A_ik` itself.
-                pushed[at] += match rigid.moves_freely(a, node) {
-                    true => a_ik,
-                    false => block_product(&a_ik, &rigid.translation(a, node)),
-                };
+                pushed[at] += rigid.translation(a, node).map_or(a_ik, |translation| block_product(&a_ik, &translation));
                 pushed[at + 1] += block_product(&a_ik, &rigid.rotation(a, node));
             });
         };
