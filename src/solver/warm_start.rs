@@ -16,17 +16,15 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::PARALLEL_MIN_LEN;
 use super::filter::Filters;
+use super::reduce::reduce;
 
 /// Solutions kept. Over the first 60 frames of the 256² hang scene, starting from rest
 /// took 734 iterations, from the last one, two, three and four solutions 728 (the last
 /// solution scaled), 674, 645 and 642. Each costs a product a step and 12 bytes a
 /// particle.
 pub const KEPT: usize = 3;
-
-/// Particles per task of the dot products, fixed so that the sums do not depend on the
-/// number of threads.
-const CHUNK: usize = 2048;
 
 /// A direction whose energy is below this fraction of the largest of them is one the
 /// others already span, left out of the combination.
@@ -38,9 +36,6 @@ pub struct WarmStart {
     /// Up to [`KEPT`] solutions, the next to be replaced at `oldest`.
     solutions: Vec<Vec<Vec3>>,
     oldest: usize,
-    /// Per chunk of particles, the partial sums of one pass: the energy products of a
-    /// solution with each, and its product with the right-hand side.
-    partials: Vec<[f64; KEPT + 1]>,
 }
 
 impl WarmStart {
@@ -89,29 +84,32 @@ impl WarmStart {
         for k in 0..count {
             let (before, rest) = self.solutions.split_at_mut(k);
             let solution = &mut rest[0];
-            solution.par_iter_mut().enumerate().with_min_len(CHUNK).for_each(|(i, u)| *u = filter.apply(i, *u));
+            solution
+                .par_iter_mut()
+                .enumerate()
+                .with_min_len(PARALLEL_MIN_LEN)
+                .for_each(|(i, u)| *u = filter.apply(i, *u));
             multiply(solution, product);
             let (solution, product) = (&*solution, &*product);
-            product
-                .par_chunks(CHUNK)
-                .enumerate()
-                .map(|(c, w)| {
-                    let mut sums = [0.0f64; KEPT + 1];
-                    for (j, w) in w.iter().enumerate() {
-                        let i = c * CHUNK + j;
-                        for (l, kept) in before.iter().chain([solution]).enumerate() {
-                            sums[l] += f64::from(kept[i].dot(*w));
-                        }
-                        let p = prescribed.get(i).copied().unwrap_or(Vec3::ZERO);
-                        sums[KEPT] += f64::from(solution[i].dot(rhs[i]) - w.dot(p));
+            // Per particle, the energy products of this solution with each kept so far, and
+            // its product with `b − A p`, summed the same way on any number of threads.
+            let terms = |range: std::ops::Range<usize>| {
+                let mut sums = [0.0f64; KEPT + 1];
+                for i in range {
+                    let w = product[i];
+                    for (l, kept) in before.iter().chain([solution]).enumerate() {
+                        sums[l] += f64::from(kept[i].dot(w));
                     }
-                    sums
-                })
-                .collect_into_vec(&mut self.partials);
-            let sums = self.partials.iter().fold([0.0; KEPT + 1], |mut total, sums| {
-                total.iter_mut().zip(sums).for_each(|(t, s)| *t += s);
-                total
-            });
+                    let p = prescribed.get(i).copied().unwrap_or(Vec3::ZERO);
+                    sums[KEPT] += f64::from(solution[i].dot(rhs[i]) - w.dot(p));
+                }
+                sums
+            };
+            let add = |mut left: [f64; KEPT + 1], right: [f64; KEPT + 1]| {
+                left.iter_mut().zip(right).for_each(|(l, r)| *l += r);
+                left
+            };
+            let sums = reduce(0..product.len(), &terms, &add);
             for l in 0..=k {
                 (gram[k][l], gram[l][k]) = (sums[l], sums[l]);
             }
@@ -119,7 +117,7 @@ impl WarmStart {
         }
         let weights = solve_dropping_dependent(gram, load, count);
         let solutions = &self.solutions[..count];
-        delta.par_iter_mut().enumerate().with_min_len(CHUNK).for_each(|(i, d)| {
+        delta.par_iter_mut().enumerate().with_min_len(PARALLEL_MIN_LEN).for_each(|(i, d)| {
             let p = prescribed.get(i).copied().unwrap_or(Vec3::ZERO);
             *d = solutions.iter().zip(&weights).fold(p, |d, (u, &y)| d + y as f32 * u[i]);
         });
