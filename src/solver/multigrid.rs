@@ -69,9 +69,11 @@ const MIN_REDUCTION: f32 = 0.7;
 const DENSE_LIMIT: usize = 200;
 
 /// Most power iterations per system for the spectral radius of the Jacobi-preconditioned
-/// matrix. They start from the last system's dominant mode, so after the first system two
-/// or three reach [`POWER_TOLERANCE`]; from an arbitrary start on a 256² sheet four gave
-/// 2.1 against a radius of 3.2, twelve 3.0.
+/// matrix. They start from the last system's dominant mode, and the first one's estimate
+/// is measured against the last system's radius, so on hang_256's finest level one
+/// iteration mostly reaches [`POWER_TOLERANCE`] (its coarse levels take three to six);
+/// from an arbitrary start on a 256² sheet four gave 2.1 against a radius of 3.2, twelve
+/// 3.0.
 const MAX_POWER_ITERATIONS: usize = 30;
 
 /// Relative change of the spectral radius estimate at which the power iterations stop.
@@ -384,8 +386,9 @@ fn aggregate(pattern: &BlockPattern) -> (Vec<u32>, usize) {
 struct Level {
     /// The smoothers' inverse diagonal.
     inverse: Jacobi,
-    /// Weight of the prolongator's Jacobi step, `4 / (3 ρ)` for ρ the estimated spectral
-    /// radius of `D⁻¹ A`.
+    /// The estimated spectral radius ρ of `D⁻¹ A`.
+    radius: f32,
+    /// Weight of the prolongator's Jacobi step, `4 / (3 ρ)`.
     weight: f32,
     /// Per Chebyshev step, the weights `(keep, gain)` of its update
     /// `d = keep d + gain D⁻¹ (r − A z)`, `z += d`.
@@ -874,28 +877,25 @@ impl Operator<'_> {
         });
     }
 
-    /// `out = A x`.
+    /// `out = A x`. The cycle's products take the lumps' part row by row in the pass
+    /// that finishes them ([`SymmetricBlockMatrix::multiply_then`]).
+    #[cfg(test)]
     fn multiply(&self, x: &[Vec3], out: &mut [Vec3]) {
-        self.multiply_stored(x, out);
+        self.matrix.multiply(self.pattern, x, out);
         if self.lumps.is_some() {
             add_rows(out, |i| self.shift(i) * x[i]);
         }
     }
 
-    /// `out = A x` less the lumps' part, `A x − l_i x_i`: the stored blocks' product
-    /// alone, whose users add the lumps' row by row in a pass they make anyway.
-    fn multiply_stored(&self, x: &[Vec3], out: &mut [Vec3]) {
-        self.matrix.multiply(self.pattern, x, out);
-    }
-
-    /// `out = S (r − A z)`: the product, each stored block read once, then the
-    /// difference.
-    fn residual(&self, r: &[Vec3], z: &[Vec3], out: &mut [Vec3]) {
-        self.matrix.multiply(self.pattern, z, out);
-        out.par_iter_mut()
-            .with_min_len(PARALLEL_MIN_LEN)
-            .enumerate()
-            .for_each(|(i, out)| *out = self.filtered(i, r[i] - *out - self.shift(i) * z[i]));
+    /// `out = S (r − A z)`: the product, each stored block read once, and the difference
+    /// formed as each run of its rows is whole.
+    fn residual(&self, r: &[Vec3], z: &mut [Vec3], out: &mut [Vec3]) {
+        self.matrix.multiply_then(self.pattern, z, out, &mut vec![(); r.len()], |first, z, out, _| {
+            for (k, (out, z)) in out.iter_mut().zip(z.iter()).enumerate() {
+                let i = first + k;
+                *out = self.filtered(i, r[i] - *out - self.shift(i) * *z);
+            }
+        });
     }
 }
 
@@ -1086,30 +1086,42 @@ impl Level {
             // A start with every direction in it.
             self.dominant.clear();
             self.dominant.extend((0..n as u32).map(irregular));
+            self.radius = 0.0;
         }
         self.scratch.resize(n, Vec3::ZERO);
         // The length of the iterate, which after an iteration is that iteration's estimate.
         let mut norm = length(&self.dominant);
-        let mut radius = 0.0;
-        for iteration in 0..MAX_POWER_ITERATIONS {
+        // The first iteration's estimate settles against the last system's.
+        let mut radius = f64::from(self.radius);
+        for _ in 0..MAX_POWER_ITERATIONS {
             if norm == 0.0 {
                 break;
             }
-            a.multiply(&self.dominant, &mut self.scratch);
-            let (inverse, scratch) = (&self.inverse, &self.scratch);
-            self.dominant
-                .par_iter_mut()
-                .with_min_len(PARALLEL_MIN_LEN)
-                .enumerate()
-                .for_each(|(i, x)| *x = inverse.apply(i, |k| scratch[k]) / norm as f32);
+            // x ← D⁻¹ A x / |x|, each run of rows as soon as its product is whole.
+            let inverse = &self.inverse;
+            a.matrix.multiply_then(
+                a.pattern,
+                &mut self.dominant,
+                &mut self.scratch,
+                &mut vec![(); n],
+                |first, x, ax, _| {
+                    for (k, (ax, x)) in ax.iter_mut().zip(x.iter()).enumerate() {
+                        *ax += a.shift(first + k) * *x;
+                    }
+                    for (k, x) in x.iter_mut().enumerate() {
+                        *x = inverse.apply(first + k, |m| ax[m - first]) / norm as f32;
+                    }
+                },
+            );
             let estimate = length(&self.dominant);
-            let settled = iteration > 0 && (estimate - radius).abs() <= POWER_TOLERANCE * estimate;
+            let settled = (estimate - radius).abs() <= POWER_TOLERANCE * estimate;
             (radius, norm) = (estimate, estimate);
             if settled {
                 break;
             }
         }
         let radius = radius as f32;
+        self.radius = radius;
         self.weight = if radius > 0.0 { 4.0 / (3.0 * radius) } else { 0.0 };
         self.chebyshev = chebyshev_weights(CHEBYSHEV_MARGIN * radius);
     }
@@ -1246,16 +1258,23 @@ impl Level {
         self.step.resize(z.len(), Vec3::ZERO);
         for (sweep, &(keep, gain)) in self.chebyshev.iter().enumerate() {
             let start = first && sweep == 0;
-            if !start {
-                a.multiply_stored(z, &mut self.scratch);
+            let update = Update { inverse: &self.inverse, first: sweep == 0, start, keep, gain };
+            if start {
+                update.apply(z, &mut self.step, |i, _| r[i]);
+                continue;
             }
-            let (inverse, scratch, step) = (&self.inverse, &self.scratch, &mut self.step);
-            let update = Update { inverse, first: sweep == 0, start, keep, gain };
-            match (start, a.lumps.is_some()) {
-                (true, _) => update.apply(z, step, |i, _| r[i]),
-                (false, true) => update.apply(z, step, |i, z| r[i] - scratch[i] - a.shift(i) * z),
-                (false, false) => update.apply(z, step, |i, _| r[i] - scratch[i]),
-            }
+            // Each run of rows updated as soon as its product is whole.
+            let lumped = a.lumps.is_some();
+            a.matrix.multiply_then(
+                a.pattern,
+                z,
+                &mut self.scratch,
+                &mut self.step,
+                |first, z, az, step| match lumped {
+                    true => update.rows(first, z, step, |i, z| r[i] - az[i - first] - a.shift(i) * z),
+                    false => update.rows(first, z, step, |i, _| r[i] - az[i - first]),
+                },
+            );
         }
     }
 }
@@ -1338,13 +1357,22 @@ impl Update<'_> {
     /// closure of its own for each way the residual is found, so that each loop is
     /// compiled for its own. Only unpaired levels' residuals may read `z_i`.
     fn apply(&self, z: &mut [Vec3], step: &mut [Vec3], residual: impl Fn(usize, Vec3) -> Vec3 + Sync) {
-        let Self { inverse, first, start, keep, gain } = *self;
-        z.par_iter_mut().zip(step.par_iter_mut()).with_min_len(PARALLEL_MIN_LEN).enumerate().for_each(|(i, (z, d))| {
-            let current = *z;
-            let push = gain * inverse.apply(i, |k| residual(k, current));
-            *d = if first { push } else { keep * *d + push };
-            *z = if start { *d } else { *z + *d };
+        const C: usize = 2 * PARALLEL_MIN_LEN;
+        z.par_chunks_mut(C).zip(step.par_chunks_mut(C)).enumerate().for_each(|(c, (z, step))| {
+            self.rows(c * C, z, step, &residual);
         });
+    }
+
+    /// [`Update::apply`] on the rows from `first` (even), `z` and `step` theirs.
+    #[inline]
+    fn rows(&self, first: usize, z: &mut [Vec3], step: &mut [Vec3], residual: impl Fn(usize, Vec3) -> Vec3) {
+        let Self { inverse, first: first_step, start, keep, gain } = *self;
+        for (k, (z, d)) in z.iter_mut().zip(step.iter_mut()).enumerate() {
+            let current = *z;
+            let push = gain * inverse.apply(first + k, |i| residual(i, current));
+            *d = if first_step { push } else { keep * *d + push };
+            *z = if start { *d } else { *z + *d };
+        }
     }
 }
 
