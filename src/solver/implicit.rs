@@ -378,7 +378,7 @@ pub fn implicit_step(
     let (tolerance, guide) = (settings.cg_tolerance, LAG_LOOSENING * settings.cg_tolerance);
     let first = if friction { guide } else { tolerance };
     let start = match starts_warm(settings) && projected_start(dynamics, settings, ws) {
-        true => Start::Given,
+        true => Start::Projected,
         false => Start::Prescribed,
     };
     report.iterations += solve(dynamics, settings, start, first, x, h * theta, ws);
@@ -667,6 +667,9 @@ enum Start {
     Zero,
     /// From `delta` as it is: this step's last solution, its prescribed part changed.
     Given,
+    /// From `delta` as the warm start left it, `A delta` in the conjugate gradients'
+    /// product buffer ([`WarmStart::start`]).
+    Projected,
 }
 
 /// Whether the step's first solve starts from the last steps' solutions
@@ -690,9 +693,10 @@ fn projected_start(dynamics: &impl LinearDynamics, settings: &ImplicitSettings, 
     let started = Instant::now();
     let system = step_system(dynamics, &ws.system, -ws.spring_weights.stiffness);
     let (springs, weights) = (springs_of(settings, dynamics), ws.spring_weights);
-    let ImplicitWorkspace { warm_start, filter, rhs, prescribed, product, delta, .. } = ws;
+    let ImplicitWorkspace { warm_start, filter, rhs, prescribed, product, residual, direction, delta, .. } = ws;
     let multiply = |x: &[Vec3], out: &mut [Vec3]| multiply_system(system, springs, weights, x, out);
-    let started_warm = warm_start.start(filter, rhs, prescribed, multiply, product, delta);
+    let products = [product.as_mut_slice(), residual, direction];
+    let started_warm = warm_start.start(filter, rhs, prescribed, multiply, products, delta);
     ws.stages.solve += started.elapsed();
     started_warm
 }
@@ -741,19 +745,24 @@ fn solve(
         Start::Prescribed if ws.prescribed.is_empty() => ws.delta.fill(Vec3::ZERO),
         Start::Prescribed => ws.delta.copy_from_slice(&ws.prescribed),
         Start::Zero => ws.delta.fill(Vec3::ZERO),
-        Start::Given => {}
+        Start::Given | Start::Projected => {}
     }
     let (pattern, couplings, springs) =
         (dynamics.pattern(), dynamics.constant_couplings(), springs_of(settings, dynamics));
-    let at_rest = start == Start::Zero || (start == Start::Prescribed && ws.prescribed.is_empty());
+    let known = match start {
+        Start::Zero => StartProduct::Zero,
+        Start::Prescribed if ws.prescribed.is_empty() => StartProduct::Zero,
+        Start::Projected => StartProduct::Formed,
+        Start::Prescribed | Start::Given => StartProduct::Unknown,
+    };
     let iterations = match settings.linear_solver {
         LinearSolver::ConjugateGradient => {
-            conjugate_gradient(pattern, couplings, None, springs, settings, tolerance, x, at_rest, ws)
+            conjugate_gradient(pattern, couplings, None, springs, settings, tolerance, x, known, ws)
         }
         LinearSolver::Multigrid => {
             let hierarchy = Some(dynamics.hierarchy());
             let iterations =
-                conjugate_gradient(pattern, couplings, hierarchy, springs, settings, tolerance, x, at_rest, ws);
+                conjugate_gradient(pattern, couplings, hierarchy, springs, settings, tolerance, x, known, ws);
             // A looser solve's iterations say nothing of the levels' strength.
             if tolerance == settings.cg_tolerance {
                 ws.multigrid.record(iterations);
@@ -786,6 +795,17 @@ fn solve(
     };
     ws.stages.solve += started.elapsed().saturating_sub(ws.stages.preconditioner - preconditioner);
     iterations
+}
+
+/// What the conjugate gradients know of `A δ` where they start.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum StartProduct {
+    /// `δ` is zero, and so is its product.
+    Zero,
+    /// The product buffer holds it ([`Start::Projected`]).
+    Formed,
+    /// It is to be multiplied.
+    Unknown,
 }
 
 /// Particles per task in the conjugate gradients' vector kernels. Fixed, so that the
@@ -825,7 +845,7 @@ fn fused(
 /// `delta` starts as given and only moves within the filters. The preconditioner is a
 /// multigrid V-cycle over `hierarchy` if given, else block Jacobi; the system's constant
 /// `couplings` outside its pattern, if any, enter both and every product. A solve that
-/// starts `at_rest` (`delta` zero) takes its first residual without a product. Returns the
+/// starts where `known` gives `A delta` takes its first residual without a product. Returns the
 /// iterations taken. Stops early on a direction of non-positive curvature, which a
 /// semi-definite assembly should not give. The vector work runs in parallel over fixed chunks of
 /// particles, each pass computing the dot products it needs on the way, summed in chunk
@@ -838,7 +858,7 @@ fn conjugate_gradient(
     settings: &ImplicitSettings,
     tolerance: f32,
     x: &[Vec3],
-    at_rest: bool,
+    known: StartProduct,
     ws: &mut ImplicitWorkspace,
 ) -> u32 {
     const C: usize = VECTOR_CHUNK;
@@ -893,17 +913,20 @@ fn conjugate_gradient(
 
     // r = S (b − A δ), z = M⁻¹ r, d = z: from rest, r = S b, with no product of the
     // matrix with zero (0.76 ms a frame of hang_256's, whose steps start from rest).
-    let mut rr = if at_rest {
-        fused(residual, rhs, partials, |i, r, b| {
+    let mut rr = match known {
+        StartProduct::Zero => fused(residual, rhs, partials, |i, r, b| {
             *r = filter.apply(i, b);
             f64::from(r.length_squared())
-        })
-    } else {
-        multiply_system(system, springs, weights, delta, product);
-        fused(residual, product, partials, |i, r, q| {
-            *r = filter.apply(i, rhs[i] - q);
-            f64::from(r.length_squared())
-        })
+        }),
+        StartProduct::Formed | StartProduct::Unknown => {
+            if known == StartProduct::Unknown {
+                multiply_system(system, springs, weights, delta, product);
+            }
+            fused(residual, product, partials, |i, r, q| {
+                *r = filter.apply(i, rhs[i] - q);
+                f64::from(r.length_squared())
+            })
+        }
     };
     let mut rz = precondition(multigrid, residual, product, partials);
     direction.copy_from_slice(product);

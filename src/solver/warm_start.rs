@@ -60,8 +60,10 @@ impl WarmStart {
 
     /// Sets `delta` to `prescribed + Σ y_k S u_k`, `u_k` the kept solutions and `S` the
     /// `filter`, with the `y` that minimise the error's energy `‖δ − A⁻¹ b‖_A` among such
-    /// combinations, the system `A` given by `multiply` (`out = A x`) and `b` by `rhs`;
-    /// `product` is scratch. Returns false, leaving `delta` alone, with nothing kept.
+    /// combinations, the system `A` given by `multiply` (`out = A x`) and `b` by `rhs`,
+    /// and `products[0]` to `A δ`, formed from the kept solutions' products rather than
+    /// by another product, so that the solve's first residual needs none; the other
+    /// `products` are scratch. Returns false, leaving `delta` alone, with nothing kept.
     /// The kept solutions are filtered in place: what the constraints rule out of this
     /// step is no use to the next one's start either.
     pub fn start(
@@ -70,59 +72,80 @@ impl WarmStart {
         rhs: &[Vec3],
         prescribed: &[Vec3],
         mut multiply: impl FnMut(&[Vec3], &mut [Vec3]),
-        product: &mut [Vec3],
+        mut products: [&mut [Vec3]; KEPT],
         delta: &mut [Vec3],
     ) -> bool {
         let count = self.solutions.len();
         if count == 0 || self.solutions[0].len() != delta.len() {
             return false;
         }
-        // Gram matrix G_kl = u_kᵀ A u_l and c_k = u_kᵀ (b − A p), p the prescribed part:
-        // with u_k filtered, u_kᵀ S w = u_kᵀ w, and u_kᵀ A p = (A u_k)ᵀ p.
-        let mut gram = [[0.0f64; KEPT]; KEPT];
-        let mut load = [0.0f64; KEPT];
-        for k in 0..count {
-            let (before, rest) = self.solutions.split_at_mut(k);
-            let solution = &mut rest[0];
+        for (solution, product) in self.solutions.iter_mut().zip(products.iter_mut()) {
             solution
                 .par_iter_mut()
                 .enumerate()
                 .with_min_len(PARALLEL_MIN_LEN)
                 .for_each(|(i, u)| *u = filter.apply(i, *u));
             multiply(solution, product);
-            let (solution, product) = (&*solution, &*product);
-            // Per particle, the energy products of this solution with each kept so far, and
-            // its product with `b − A p`, summed the same way on any number of threads.
-            let terms = |range: std::ops::Range<usize>| {
-                let mut sums = [0.0f64; KEPT + 1];
-                for i in range {
-                    let w = product[i];
-                    for (l, kept) in before.iter().chain([solution]).enumerate() {
-                        sums[l] += f64::from(kept[i].dot(w));
-                    }
-                    let p = prescribed.get(i).copied().unwrap_or(Vec3::ZERO);
-                    sums[KEPT] += f64::from(solution[i].dot(rhs[i]) - w.dot(p));
-                }
-                sums
-            };
-            let add = |mut left: [f64; KEPT + 1], right: [f64; KEPT + 1]| {
-                left.iter_mut().zip(right).for_each(|(l, r)| *l += r);
-                left
-            };
-            let sums = reduce(0..product.len(), &terms, &add);
-            for l in 0..=k {
-                (gram[k][l], gram[l][k]) = (sums[l], sums[l]);
-            }
-            load[k] = sums[KEPT];
         }
-        let weights = solve_dropping_dependent(gram, load, count);
-        let solutions = &self.solutions[..count];
-        delta.par_iter_mut().enumerate().with_min_len(PARALLEL_MIN_LEN).for_each(|(i, d)| {
-            let p = prescribed.get(i).copied().unwrap_or(Vec3::ZERO);
-            *d = solutions.iter().zip(&weights).fold(p, |d, (u, &y)| d + y as f32 * u[i]);
-        });
+        // Gram matrix G_kl = u_kᵀ A u_l (its lower triangle, row by row) and
+        // c_k = u_kᵀ (b − A p), p the prescribed part: with u_k filtered, u_kᵀ S w = u_kᵀ w,
+        // and u_kᵀ A p = (A u_k)ᵀ p. All in one pass, summed the same way on any number of
+        // threads.
+        let (solutions, kept) = (&self.solutions[..count], &products[..count]);
+        let terms = |range: std::ops::Range<usize>| {
+            let mut sums = [0.0f64; PAIRS + KEPT];
+            for i in range {
+                let p = prescribed.get(i).copied().unwrap_or(Vec3::ZERO);
+                for (k, (solution, product)) in solutions.iter().zip(kept).enumerate() {
+                    let w = product[i];
+                    for (l, other) in solutions[..=k].iter().enumerate() {
+                        sums[pair(k, l)] += f64::from(other[i].dot(w));
+                    }
+                    sums[PAIRS + k] += f64::from(solution[i].dot(rhs[i]) - w.dot(p));
+                }
+            }
+            sums
+        };
+        let add = |mut left: [f64; PAIRS + KEPT], right: [f64; PAIRS + KEPT]| {
+            left.iter_mut().zip(right).for_each(|(l, r)| *l += r);
+            left
+        };
+        let sums = reduce(0..delta.len(), &terms, &add);
+        let (mut gram, mut load) = ([[0.0f64; KEPT]; KEPT], [0.0f64; KEPT]);
+        for k in 0..count {
+            for l in 0..=k {
+                (gram[k][l], gram[l][k]) = (sums[pair(k, l)], sums[pair(k, l)]);
+            }
+            load[k] = sums[PAIRS + k];
+        }
+        let weights = solve_dropping_dependent(gram, load, count).map(|y| y as f32);
+        // A p into `delta`, which the pass below reads before it writes.
+        if !prescribed.is_empty() {
+            multiply(prescribed, delta);
+        }
+        let [combined, others @ ..] = products;
+        let others: [&[Vec3]; KEPT - 1] = others.map(|other| &*other);
+        combined.par_iter_mut().zip(delta.par_iter_mut()).enumerate().with_min_len(PARALLEL_MIN_LEN).for_each(
+            |(i, (product, d))| {
+                let (p, pushed) = match prescribed.get(i) {
+                    Some(&p) => (p, *d),
+                    None => (Vec3::ZERO, Vec3::ZERO),
+                };
+                let kept = std::iter::once(*product).chain(others.iter().map(|other| other[i]));
+                *product = kept.zip(&weights).take(count).fold(pushed, |sum, (w, &y)| sum + y * w);
+                *d = solutions.iter().zip(&weights).fold(p, |d, (u, &y)| d + y * u[i]);
+            },
+        );
         true
     }
+}
+
+/// Entries of the Gram matrix's lower triangle.
+const PAIRS: usize = KEPT * (KEPT + 1) / 2;
+
+/// Where `G_kl`, `l ≤ k`, lies among the [`PAIRS`] sums.
+const fn pair(k: usize, l: usize) -> usize {
+    k * (k + 1) / 2 + l
 }
 
 /// `y` with `G y = c` over the first `count` unknowns, by Cholesky's factors of the
@@ -178,11 +201,53 @@ mod tests {
         start.keep(&u1);
         // A third, dependent solution changes nothing.
         start.keep(&u0.iter().zip(&u1).map(|(p, q)| *p + *q).collect::<Vec<_>>());
-        let (mut product, mut delta) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+        let (mut products, mut delta) = (buffers(n), vec![Vec3::ZERO; n]);
         let multiply = |x: &[Vec3], out: &mut [Vec3]| out.iter_mut().enumerate().for_each(|(i, o)| *o = a(i) * x[i]);
-        assert!(start.start(&Filters::free(n), &b, &[], multiply, &mut product, &mut delta));
+        assert!(start.start(
+            &Filters::free(n),
+            &b,
+            &[],
+            multiply,
+            products.each_mut().map(|p| p.as_mut_slice()),
+            &mut delta
+        ));
         let error = delta.iter().zip(&exact).map(|(d, e)| (*d - *e).length()).fold(0.0, f32::max);
         assert!(error < 1e-4, "largest error {error}");
+        assert_forms_the_product(multiply, &delta, &products[0]);
+    }
+
+    #[test]
+    fn the_combination_adds_to_the_prescribed_part() {
+        // A diagonal system whose solution is the prescribed part plus 2 u₀.
+        let n = 4000;
+        let a = |i: usize| 2.0 + (i % 5) as f32;
+        let u0: Vec<Vec3> = (0..n).map(|i| Vec3::new(1.0, (i % 9) as f32 * 0.1, -0.5)).collect();
+        let prescribed: Vec<Vec3> = (0..n).map(|i| if i % 50 == 0 { Vec3::splat(0.3) } else { Vec3::ZERO }).collect();
+        let exact: Vec<Vec3> = (0..n).map(|i| prescribed[i] + 2.0 * u0[i]).collect();
+        let b: Vec<Vec3> = (0..n).map(|i| a(i) * exact[i]).collect();
+        let mut start = WarmStart::default();
+        start.keep(&u0);
+        let (mut products, mut delta) = (buffers(n), vec![Vec3::ZERO; n]);
+        let multiply = |x: &[Vec3], out: &mut [Vec3]| out.iter_mut().enumerate().for_each(|(i, o)| *o = a(i) * x[i]);
+        let slices = products.each_mut().map(|p| p.as_mut_slice());
+        assert!(start.start(&Filters::free(n), &b, &prescribed, multiply, slices, &mut delta));
+        let error = delta.iter().zip(&exact).map(|(d, e)| (*d - *e).length()).fold(0.0, f32::max);
+        assert!(error < 1e-5, "largest error {error}");
+        assert_forms_the_product(multiply, &delta, &products[0]);
+    }
+
+    /// Scratch for [`WarmStart::start`]'s products.
+    fn buffers(n: usize) -> [Vec<Vec3>; KEPT] {
+        std::array::from_fn(|_| vec![Vec3::ZERO; n])
+    }
+
+    /// `formed` is `A delta` within rounding.
+    fn assert_forms_the_product(multiply: impl Fn(&[Vec3], &mut [Vec3]), delta: &[Vec3], formed: &[Vec3]) {
+        let mut exact = vec![Vec3::ZERO; delta.len()];
+        multiply(delta, &mut exact);
+        let scale = exact.iter().map(|e| e.length()).fold(0.0, f32::max);
+        let error = exact.iter().zip(formed).map(|(e, f)| (*e - *f).length()).fold(0.0, f32::max);
+        assert!(error <= 1e-5 * scale, "A δ formed off by {error} of {scale}");
     }
 
     /// `E(δ) = δᵀ A δ − 2 δᵀ b`, the error's energy `‖δ − A⁻¹ b‖²_A` less a constant.
@@ -211,8 +276,10 @@ mod tests {
         let kept = [wave(0.013, 0.0), wave(0.2, 1.0), wave(0.011, 2.0)];
         let mut start = WarmStart::default();
         kept.iter().for_each(|u| start.keep(u));
-        let (mut product, mut delta) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
-        assert!(start.start(&Filters::free(n), &b, &[], multiply, &mut product, &mut delta));
+        let (mut products, mut delta) = (buffers(n), vec![Vec3::ZERO; n]);
+        let slices = products.each_mut().map(|p| p.as_mut_slice());
+        assert!(start.start(&Filters::free(n), &b, &[], multiply, slices, &mut delta));
+        assert_forms_the_product(multiply, &delta, &products[0]);
         let best = energy(multiply, &b, &delta);
         assert!(best < 0.0, "worse than rest: {best}");
         for u in &kept {
@@ -227,13 +294,16 @@ mod tests {
     #[test]
     fn nothing_kept_gives_no_start_and_another_size_forgets() {
         let mut start = WarmStart::default();
-        let (mut product, mut delta) = (vec![Vec3::ZERO; 4], vec![Vec3::ONE; 4]);
+        let (mut products, mut delta) = (buffers(4), vec![Vec3::ONE; 4]);
         let multiply = |x: &[Vec3], out: &mut [Vec3]| out.copy_from_slice(x);
-        assert!(!start.start(&Filters::free(4), &[Vec3::X; 4], &[], multiply, &mut product, &mut delta));
+        let slices = products.each_mut().map(|p| p.as_mut_slice());
+        assert!(!start.start(&Filters::free(4), &[Vec3::X; 4], &[], multiply, slices, &mut delta));
         start.keep(&[Vec3::X; 3]);
         start.keep(&[Vec3::X; 4]);
         assert_eq!(start.solutions.len(), 1);
-        assert!(start.start(&Filters::free(4), &[Vec3::X * 2.0; 4], &[], multiply, &mut product, &mut delta));
+        let slices = products.each_mut().map(|p| p.as_mut_slice());
+        assert!(start.start(&Filters::free(4), &[Vec3::X * 2.0; 4], &[], multiply, slices, &mut delta));
         assert_eq!(delta, vec![Vec3::X * 2.0; 4]);
+        assert_eq!(products[0], vec![Vec3::X * 2.0; 4]);
     }
 }
