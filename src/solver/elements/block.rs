@@ -585,20 +585,26 @@ impl SymmetricBlockMatrix {
     /// chunk's: first every other chunk in parallel, then the rest. The chunks do not
     /// depend on the number of threads, nor, so, the sums.
     pub fn multiply(&self, pattern: &BlockPattern, x: &[Vec3], out: &mut [Vec3]) {
-        let (n, chunk) = (out.len(), product_chunk(pattern));
-        for phase in 0..2 {
-            let start = (phase * chunk).min(n);
-            out[start..].par_chunks_mut(2 * chunk).zip(x[start..].par_chunks(2 * chunk)).enumerate().for_each(
-                |(c, (out, x))| {
-                    if phase == 0 {
-                        // The first phase's pairs of chunks cover every row.
-                        out.fill(Vec3::ZERO);
-                    }
-                    let first = start + 2 * c * chunk;
-                    self.add_rows_product(pattern, first..(first + chunk).min(n), x, out);
-                },
-            );
-        }
+        let chunk = product_chunk(pattern);
+        self.add_chunks(pattern, chunk, 0, x, out);
+        self.add_chunks(pattern, chunk, chunk.min(out.len()), x, out);
+    }
+
+    /// One phase of [`SymmetricBlockMatrix::multiply`]: every other chunk of `chunk` rows
+    /// from `start` in parallel, each adding to itself and the next with its two chunks of
+    /// `x`; the first phase (from row 0), whose pairs of chunks cover every row, zeroes
+    /// `out` first.
+    fn add_chunks(&self, pattern: &BlockPattern, chunk: usize, start: usize, x: &[Vec3], out: &mut [Vec3]) {
+        let n = out.len();
+        out[start..].par_chunks_mut(2 * chunk).zip(x[start..].par_chunks(2 * chunk)).enumerate().for_each(
+            |(c, (out, x))| {
+                if start == 0 {
+                    out.fill(Vec3::ZERO);
+                }
+                let first = start + 2 * c * chunk;
+                self.add_rows_product(pattern, first..(first + chunk).min(n), x, out);
+            },
+        );
     }
 
     /// `out = self · x` as [`SymmetricBlockMatrix::multiply`] forms it, then
@@ -621,12 +627,7 @@ impl SymmetricBlockMatrix {
         finish: impl Fn(usize, &mut [Vec3], &mut [Vec3], &mut [T]) + Sync,
     ) {
         let (n, chunk) = (out.len(), product_chunk(pattern));
-        let pairs = |first: usize| first..(first + chunk).min(n);
-        // Every other chunk first, each adding to itself and the next.
-        out.par_chunks_mut(2 * chunk).zip(x.par_chunks(2 * chunk)).enumerate().for_each(|(c, (out, x))| {
-            out.fill(Vec3::ZERO);
-            self.add_rows_product(pattern, pairs(2 * c * chunk), x, out);
-        });
+        self.add_chunks(pattern, chunk, 0, x, out);
         // Then the rest: once a chunk has added its rows, they and the next chunk's are
         // whole, and no other task reads their `x`.
         let start = chunk.min(n);
@@ -639,7 +640,7 @@ impl SymmetricBlockMatrix {
             .enumerate()
             .for_each(|(c, ((out, x), beside))| {
                 let first = start + 2 * c * chunk;
-                self.add_rows_product(pattern, pairs(first), x, out);
+                self.add_rows_product(pattern, first..(first + chunk).min(n), x, out);
                 finish(first, x, out, beside);
             });
         // The first chunk was whole after the first phase.
