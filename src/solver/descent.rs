@@ -33,7 +33,7 @@ use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
 use super::elements::BlockPattern;
-use super::filter::{Filters, filtered_inverse};
+use super::filter::Filters;
 use super::implicit::StepSystem;
 use crate::collision::motion_bounds::Bound;
 
@@ -328,7 +328,7 @@ pub fn descend(
 ) -> u32 {
     let n = delta.len();
     ws.step.clear();
-    ws.step.extend((0..n).map(|i| filtered_inverse(filter.block(i), system.diagonal(i))));
+    ws.step.extend((0..n).map(|i| filter.inverse(i, system.diagonal(i))));
     ws.previous.resize(n, Vec3::ZERO);
     ws.before.resize(n, Vec3::ZERO);
     // The longest move the bounds are asked to allow: the farthest the start took a

@@ -85,6 +85,16 @@ impl Filters {
         self.index[i] == FREE
     }
 
+    /// Particle `i`'s Jacobi step for the diagonal block `diagonal`, `(S D S + I − S)⁻¹ S`
+    /// ([`filtered_inverse`]), without products with the identity where it is free.
+    #[inline]
+    pub fn inverse(&self, i: usize, diagonal: Mat3) -> Mat3 {
+        match self.index[i] {
+            FREE => free_inverse(diagonal),
+            k => filtered_inverse(self.blocks[k as usize], diagonal),
+        }
+    }
+
     /// Particle `i`'s filter as a block.
     #[inline]
     pub fn block(&self, i: usize) -> Mat3 {
@@ -109,10 +119,17 @@ impl Filters {
 /// entry (a coarse rotation the multigrid dropped from an aggregate's frame leaves an empty
 /// row and column); zero where the block is singular still.
 pub fn filtered_inverse(s: Mat3, diagonal: Mat3) -> Mat3 {
-    let mut diagonal = s * diagonal * s + (Mat3::IDENTITY - s);
+    free_inverse(s * diagonal * s + (Mat3::IDENTITY - s)) * s
+}
+
+/// [`filtered_inverse`] of a free node, whose filter is the identity: `D⁻¹`, a one standing
+/// in for any empty diagonal entry, zero where singular still. The same bits as with the
+/// identity's products, which on hang_256's 65 536 particles were most of the finest
+/// smoother's inverses (1.44 ms a frame).
+pub fn free_inverse(mut diagonal: Mat3) -> Mat3 {
     let empty = Vec3::new(diagonal.x_axis.x, diagonal.y_axis.y, diagonal.z_axis.z).cmpeq(Vec3::ZERO);
     diagonal += Mat3::from_diagonal(Vec3::select(empty, Vec3::ONE, Vec3::ZERO));
-    if diagonal.determinant().abs() > 0.0 { diagonal.inverse() * s } else { Mat3::ZERO }
+    if diagonal.determinant().abs() > 0.0 { diagonal.inverse() } else { Mat3::ZERO }
 }
 
 #[cfg(test)]

@@ -50,7 +50,7 @@ use super::elements::block::{block_product, by_parts, times};
 use super::elements::half::row_product;
 use super::elements::spring::{outer, skew};
 use super::elements::{BlockPattern, HalfBlock, StoredBlock, SymmetricBlockMatrix, WeightedCouplings};
-use super::filter::{Filters, filtered_inverse};
+use super::filter::{Filters, free_inverse};
 use super::implicit::StepSystem;
 use super::pipeline::pipelined;
 use super::{PARALLEL_MIN_LEN, add_rows};
@@ -856,7 +856,8 @@ impl Operator<'_> {
     /// `(S A_ii S + I − S)⁻¹ S` for node `i` (with a one on any empty diagonal entry), zero
     /// where that is singular.
     fn inverse_diagonal(&self, i: usize) -> Mat3 {
-        filtered_inverse(self.filter(i), self.block(i as u32, i as u32))
+        let diagonal = self.matrix.diagonal(self.pattern, i) + Mat3::from_diagonal(Vec3::splat(self.shift(i)));
+        self.filter.map_or_else(|| free_inverse(diagonal), |f| f.inverse(i, diagonal))
     }
 
     /// Block `(row, column)` of the matrix, zero where the pattern has none.
