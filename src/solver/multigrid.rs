@@ -503,9 +503,9 @@ impl Jacobi {
             (0..n)
                 .into_par_iter()
                 .with_min_len(PARALLEL_MIN_LEN)
-                .map(|i| match a.filter.filter(|f| !f.is_free(i)) {
-                    Some(filter) => a.inverse_diagonal(i) * filter.block(i),
-                    None => a.inverse_diagonal(i),
+                .map(|i| {
+                    let inverse = a.inverse_diagonal(i);
+                    a.constraint(i).map_or(inverse, |filter| inverse * filter)
                 })
                 .collect_into_vec(&mut self.own);
             return;
@@ -720,7 +720,7 @@ impl Rigid<'_> {
     fn translation(&self, a: Operator, node: usize) -> Option<Mat3> {
         match self.coarsening.paired {
             true => (node % 2 == 1).then_some(Mat3::ZERO),
-            false => a.filter.filter(|filter| !filter.is_free(node)).map(|filter| filter.block(node)),
+            false => a.constraint(node),
         }
     }
 
@@ -745,7 +745,7 @@ impl Rigid<'_> {
     #[inline]
     fn rotation(&self, a: Operator, node: usize) -> Mat3 {
         let turn = self.turn(node);
-        a.filter.filter(|filter| !filter.is_free(node)).map_or(turn, |filter| filter.block(node) * turn)
+        a.constraint(node).map_or(turn, |filter| filter * turn)
     }
 
     /// Block `(node, column)` of `P₀`, `None` where the node is not in the column's
@@ -848,6 +848,14 @@ impl Operator<'_> {
         self.filter.map_or(Mat3::IDENTITY, |f| f.block(i))
     }
 
+    /// Node `i`'s filter where it constrains the node, `None` where it is the identity (a
+    /// free particle, every node below the finest level), so that a product with it can
+    /// be skipped.
+    #[inline]
+    fn constraint(&self, i: usize) -> Option<Mat3> {
+        self.filter.filter(|f| !f.is_free(i)).map(|f| f.block(i))
+    }
+
     /// `S_i v`.
     #[inline]
     fn filtered(&self, i: usize, v: Vec3) -> Vec3 {
@@ -857,16 +865,20 @@ impl Operator<'_> {
     /// `(S A_ii S + I − S)⁻¹ S` for node `i` (with a one on any empty diagonal entry), zero
     /// where that is singular.
     fn inverse_diagonal(&self, i: usize) -> Mat3 {
-        let diagonal = self.matrix.diagonal(self.pattern, i) + Mat3::from_diagonal(Vec3::splat(self.shift(i)));
+        let diagonal = self.diagonal(i);
         self.filter.map_or_else(|| free_inverse(diagonal), |f| f.inverse(i, diagonal))
+    }
+
+    /// Node `i`'s diagonal block, the lumps' shift on it, read where it is stored.
+    fn diagonal(&self, i: usize) -> Mat3 {
+        self.matrix.diagonal(self.pattern, i) + Mat3::from_diagonal(Vec3::splat(self.shift(i)))
     }
 
     /// Block `(row, column)` of the matrix, zero where the pattern has none.
     fn block(&self, row: u32, column: u32) -> Mat3 {
-        let block = self.matrix.block(self.pattern, row, column);
         match row == column {
-            true => block + Mat3::from_diagonal(Vec3::splat(self.shift(row as usize))),
-            false => block,
+            true => self.diagonal(row as usize),
+            false => self.matrix.block(self.pattern, row, column),
         }
     }
 
