@@ -33,7 +33,7 @@ use super::untangle::Untangler;
 use crate::solver::PARALLEL_MIN_LEN;
 use crate::solver::contact_springs::{ContactSpring, Stencil};
 use crate::solver::elements::spring::outer;
-use crate::solver::gather::Gather;
+use crate::solver::gather::{Gather, reserve_floored};
 
 /// The cloths that collide with one another, as one mesh with global vertex numbers.
 #[derive(Debug, Clone, Default)]
@@ -149,6 +149,36 @@ enum Pair {
     EdgeEdge(u32, u32),
 }
 
+impl Pair {
+    /// The order of a listing ([`SelfContactSolver::candidates`]): the points' pairs
+    /// first, by point and then triangle, then the edges' pairs.
+    fn key(self) -> (bool, u32, u32) {
+        match self {
+            Pair::PointTriangle(p, t) => (false, p, t),
+            Pair::EdgeEdge(e, f) => (true, e, f),
+        }
+    }
+}
+
+/// At most one vertex in this many may have moved away for [`SelfContactSolver::mend`]
+/// to list theirs alone rather than every pair again. A mend costs about 20 µs a moved
+/// vertex and 0.3 ms besides, a whole listing 3.5 ms on sphere_64 and 5.7 on fold_64;
+/// and a mend moves only the vertices that left, so the others, nearer the edge of what
+/// they are listed for, call for the next mend sooner than a whole listing would. Listing
+/// and mending over whole runs took fold_64, sphere_64 and sphere_64_adaptive 3.69, 1.58
+/// and 0.82 s at one in 64, against 3.97, 1.67 and 1.21 listing alone; 4.13, 1.95 and
+/// 0.71 at one in 16; 3.73, 1.66 and 0.98 at one in 256.
+const MEND_SHARE: usize = 64;
+
+/// Vertices whose displacements give [`SelfContactSolver::typical_motion`]: few enough
+/// to take their median on the stack.
+const TYPICAL_SAMPLES: usize = 255;
+
+/// How many margins long a mended vertex's sweep may be ([`SelfContactSolver::mend`]): a
+/// whole listing keeps the ends of sweeps longer than one margin alone, for memory, but a
+/// few vertices' longer boxes cost little.
+const MEND_SWEEP: f32 = 4.0;
+
 /// Levels below the edge tree's root at which its pairs with itself are split into
 /// independent parts: about 2¹⁰ subtrees, each with itself and with the few whose boxes
 /// meet it, enough parts to share among the threads.
@@ -186,7 +216,8 @@ pub struct SelfContactSolver {
     untangler: Untangler,
     /// Candidate pairs whose swept boxes meet.
     pairs: Vec<Pair>,
-    /// Where each vertex's sweep ended when the candidates were listed.
+    /// Where each vertex's sweep ended when the candidates were listed (or mended, moved
+    /// back by the motion common to all then, [`SelfContactSolver::mend`]).
     listed_end: Vec<Vec3>,
     /// Whether the candidates serve while each vertex stays near the box of its whole
     /// listed sweep, not only near its end: where no sweep of the listing was longer than
@@ -197,6 +228,11 @@ pub struct SelfContactSolver {
     /// Whether some vertex was exempt (being untangled) when they were listed, which
     /// left its pairs out.
     listed_with_exemptions: bool,
+    /// The vertices [`SelfContactSolver::mend`] lists again, the pairs it finds, and
+    /// which vertices lie in a triangle.
+    moved: Vec<bool>,
+    mended: Vec<Pair>,
+    in_triangle: Vec<bool>,
     /// Vertices a pass of continuous collision moved or left colliding.
     dirty: Vec<bool>,
     /// Proximity contacts among the candidates.
@@ -246,7 +282,8 @@ impl SelfContactSolver {
         // were listed for (see `candidates_cover`), as on cloth at rest, and none were left
         // out for untangling.
         let exemptions = self.untangler.watching() || self.listed_with_exemptions;
-        if exemptions || !(self.candidates_cover(mesh, x0) && self.candidates_cover(mesh, x1)) {
+        let covered = !exemptions && self.candidates_cover(mesh, x0) && self.candidates_cover(mesh, x1);
+        if !covered && (exemptions || !self.mend(mesh, x0, x1)) {
             self.candidates(mesh, x0, x1);
         }
         let pairs = &self.pairs;
@@ -265,7 +302,7 @@ impl SelfContactSolver {
         let mut remaining = true;
         for pass in 0..IMPACT_PASSES {
             let covered = self.candidates_cover(mesh, x1);
-            if !covered {
+            if !covered && !self.mend(mesh, x0, x1) {
                 self.candidates(mesh, x0, x1);
             }
             self.impacts(mesh, h, x0, x1, pass > 0 && covered);
@@ -348,7 +385,7 @@ impl SelfContactSolver {
         if !mesh.springs || mesh.triangles.is_empty() || h <= 0.0 {
             return;
         }
-        if !self.candidates_cover(mesh, x1) {
+        if !self.candidates_cover(mesh, x1) && !self.mend(mesh, x0, x1) {
             self.candidates(mesh, x0, x1);
         }
         let pairs = &self.pairs;
@@ -395,6 +432,9 @@ impl SelfContactSolver {
         }
         self.listed_end.clear();
         self.listed_end.extend_from_slice(x1);
+        // Room for mending, made while warming up, not in a step long after.
+        self.moved.resize(x1.len(), false);
+        self.in_triangle.resize(x1.len(), false);
         let (triangle_tree, edge_tree) = (&self.triangle_tree, &self.edge_tree);
         let exempt = &self.untangler.exempt;
         let free = |vertices: &[u32]| !vertices.iter().any(|&k| exempt[k as usize]);
@@ -436,6 +476,7 @@ impl SelfContactSolver {
         });
         self.edge_pairs.sort_unstable();
         self.pairs.extend(self.edge_pairs.iter().map(|&[e, f]| Pair::EdgeEdge(e, f)));
+        reserve_floored(&mut self.mended, self.pairs.len());
     }
 
     /// Whether the candidates still cover the sweeps to `x1`: no end point, moved back by
@@ -468,21 +509,180 @@ impl SelfContactSolver {
             return false;
         }
         let half = 0.5 * Self::margin(largest_gap(mesh));
-        let half_squared = half * half;
-        let (low, high) = x1
+        // Where only the ends were listed, each vertex's box is its end alone.
+        let start = if self.sweeps_listed { &self.listed_start } else { &self.listed_end };
+        let covered = |common: Vec3| {
+            x1.par_iter()
+                .zip(start)
+                .zip(&self.listed_end)
+                .with_min_len(PARALLEL_MIN_LEN)
+                .all(|((now, start), end)| !beyond(*now - common, *start, *end, half))
+        };
+        covered(self.common_motion(x1)) || covered(self.typical_motion(x1))
+    }
+
+    /// The motion common to all vertices since the candidates were listed, from where
+    /// they were listed for to `x` ([`SelfContactSolver::candidates_cover`]): the centre
+    /// of the box of their displacements, which leaves the farthest any vertex is from
+    /// where it was listed for the least.
+    fn common_motion(&self, x: &[Vec3]) -> Vec3 {
+        let (low, high) = x
             .par_iter()
             .zip(&self.listed_end)
             .with_min_len(PARALLEL_MIN_LEN)
             .map(|(now, listed)| (*now - *listed, *now - *listed))
             .reduce(|| (Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), (c, d)| (a.min(c), b.max(d)));
-        let common = 0.5 * (low + high);
-        // Where only the ends were listed, each vertex's box is its end alone.
-        let start = if self.sweeps_listed { &self.listed_start } else { &self.listed_end };
-        x1.par_iter().zip(start).zip(&self.listed_end).with_min_len(PARALLEL_MIN_LEN).all(|((now, start), end)| {
-            let moved_back = *now - common;
-            let nearest = moved_back.clamp(start.min(*end), start.max(*end));
-            moved_back.distance_squared(nearest) < half_squared
-        })
+        0.5 * (low + high)
+    }
+
+    /// The motion most vertices share since the candidates were listed, to `x`: the
+    /// median, axis by axis, of the displacements of [`TYPICAL_SAMPLES`] vertices spread
+    /// over the mesh. The centre of [`SelfContactSolver::common_motion`] lies midway
+    /// between the extremes, so where a few vertices move away, every vertex at the other
+    /// extreme is as far from it as they are: a fold on sphere_64's resting sheet left 1
+    /// to 30 vertices beyond half the margin, but moved back by the centre, 100 to 250.
+    fn typical_motion(&self, x: &[Vec3]) -> Vec3 {
+        let stride = x.len().div_ceil(TYPICAL_SAMPLES).max(1);
+        let mut samples = [0.0f32; TYPICAL_SAMPLES];
+        let count = x.len().div_ceil(stride);
+        let mut median = [0.0f32; 3];
+        for (axis, median) in median.iter_mut().enumerate() {
+            let displacements =
+                x.iter().zip(&self.listed_end).step_by(stride).map(|(now, listed)| (*now - *listed)[axis]);
+            for (sample, displacement) in samples.iter_mut().zip(displacements) {
+                *sample = displacement;
+            }
+            *median = *samples[..count].select_nth_unstable_by(count / 2, f32::total_cmp).1;
+        }
+        Vec3::from_array(median)
+    }
+
+    /// Makes the candidates cover the step from `x0` to `x1` again where a few vertices
+    /// have left what they were listed for, and returns whether it did. Moved back by the
+    /// motion most vertices share at each end ([`SelfContactSolver::typical_motion`]),
+    /// those vertices are listed for their sweep now, and their pairs are found again as
+    /// a whole listing would find them were every vertex where it is listed for: the list
+    /// stays the one a listing over those positions makes, pair for pair and in its
+    /// order, so a pair of two vertices that stayed keeps the reason it was (or was not)
+    /// listed for. The trees' boxes of the moved vertices' primitives are put in place
+    /// ([`Bvh::enlarge`]), not refitted. On sphere_64_adaptive's resting sheet, stepped
+    /// once a frame, a fold or a free edge takes a few vertices beyond half the margin at
+    /// most steps, and listing every pair again took 3 ms of a resting frame's 15 to 18;
+    /// mending, 0.1 to 1.5 ms.
+    ///
+    /// It does not where the listing kept the ends of long sweeps alone, where some
+    /// vertex was left out for untangling, where a vertex lies in no triangle (the pairs
+    /// of a point that stayed are found through its triangles' boxes), or where more than
+    /// one vertex in [`MEND_SHARE`] moved away or one's new sweep is longer than
+    /// [`MEND_SWEEP`] margins.
+    fn mend(&mut self, mesh: &ContactMesh, x0: &[Vec3], x1: &[Vec3]) -> bool {
+        let n = mesh.len();
+        if !self.sweeps_listed || self.listed_with_exemptions || self.listed_end.len() != n || x0.len() != n {
+            return false;
+        }
+        let gap = largest_gap(mesh);
+        let (margin, grown) = (Self::margin(gap), Self::grown(gap));
+        let commons = [x0, x1].map(|x| self.typical_motion(x));
+        let (start, end) = (&self.listed_start, &self.listed_end);
+        // The sweep vertex `k` is listed for if it has left its own.
+        let moved_away = |k: usize| {
+            let ends = [x0[k] - commons[0], x1[k] - commons[1]];
+            ends.iter().any(|&at| beyond(at, start[k], end[k], 0.5 * margin)).then_some(ends)
+        };
+        let count = (0..n).into_par_iter().with_min_len(PARALLEL_MIN_LEN).filter(|&k| moved_away(k).is_some()).count();
+        if count == 0 {
+            return true;
+        }
+        if count > n / MEND_SHARE {
+            return false;
+        }
+        self.in_triangle.clear();
+        self.in_triangle.resize(n, false);
+        for &k in mesh.triangles.iter().flatten() {
+            self.in_triangle[k as usize] = true;
+        }
+        if self.in_triangle.contains(&false) {
+            return false;
+        }
+        self.moved.clear();
+        self.moved.resize(n, false);
+        for k in 0..n {
+            if let Some(ends) = moved_away(k) {
+                if ends[0].distance(ends[1]) > MEND_SWEEP * margin {
+                    return false;
+                }
+                self.moved[k] = true;
+            }
+        }
+        for k in (0..n).filter(|&k| self.moved[k]) {
+            [self.listed_start[k], self.listed_end[k]] = [x0[k] - commons[0], x1[k] - commons[1]];
+        }
+        let (start, end) = (std::mem::take(&mut self.listed_start), std::mem::take(&mut self.listed_end));
+        let moved = &self.moved;
+        let touches = |vertices: &[u32]| vertices.iter().any(|&k| moved[k as usize]);
+        let swept = |vertices: &[u32]| swept_box(vertices, &start, &end).inflated(grown);
+        for (t, triangle) in mesh.triangles.iter().enumerate().filter(|(_, t)| touches(*t)) {
+            self.triangle_tree.enlarge(t as u32, swept(triangle));
+        }
+        for (e, edge) in mesh.edges.iter().enumerate().filter(|(_, e)| touches(*e)) {
+            self.edge_tree.enlarge(e as u32, swept(edge));
+        }
+        let point_box = |p: u32| swept(&[p]);
+        let (triangle_tree, edge_tree, found) = (&self.triangle_tree, &self.edge_tree, &mut self.mended);
+        // Keeps of what a primitive's query found, from `first` on, each pair once and
+        // only those that may touch: the list grows by no more than one query's finds.
+        let keep_listed = |found: &mut Vec<Pair>, first: usize| {
+            found[first..].sort_unstable_by_key(|pair| pair.key());
+            let mut kept = first;
+            for i in first..found.len() {
+                let pair = found[i];
+                if (i == first || found[i - 1] != pair) && may_touch(mesh, pair, &start, &end, margin, true) {
+                    found[kept] = pair;
+                    kept += 1;
+                }
+            }
+            found.truncate(kept);
+        };
+        found.clear();
+        for (t, triangle) in mesh.triangles.iter().enumerate().filter(|(_, t)| touches(*t)) {
+            // The points that stayed: each lies in a triangle whose box meets this one's.
+            let (first, reach) = (found.len(), triangle_tree.aabb(t as u32));
+            triangle_tree.query(&reach, |u| {
+                for p in mesh.triangles[u as usize] {
+                    if !moved[p as usize] && !triangle.contains(&p) && point_box(p).overlaps(&reach) {
+                        found.push(Pair::PointTriangle(p, t as u32));
+                    }
+                }
+            });
+            keep_listed(found, first);
+        }
+        for p in (0..n as u32).filter(|&p| moved[p as usize]) {
+            let first = found.len();
+            triangle_tree.query(&point_box(p), |t| {
+                if !mesh.triangles[t as usize].contains(&p) {
+                    found.push(Pair::PointTriangle(p, t));
+                }
+            });
+            keep_listed(found, first);
+        }
+        for (e, &[a, b]) in mesh.edges.iter().enumerate().filter(|(_, e)| touches(*e)) {
+            let (first, e) = (found.len(), e as u32);
+            edge_tree.query(&edge_tree.aabb(e), |f| {
+                let [c, d] = mesh.edges[f as usize];
+                if a != c && a != d && b != c && b != d {
+                    found.push(Pair::EdgeEdge(e.min(f), e.max(f)));
+                }
+            });
+            keep_listed(found, first);
+        }
+        // Two moved edges find each other twice.
+        found.sort_unstable_by_key(|pair| pair.key());
+        found.dedup();
+        self.pairs.retain(|&pair| !touches(&pair_vertices(mesh, pair)));
+        self.pairs.extend_from_slice(found);
+        self.pairs.sort_unstable_by_key(|pair| pair.key());
+        (self.listed_start, self.listed_end) = (start, end);
+        true
     }
 
     /// Lists in `hits` the candidate pairs whose paths from `x0` to `x1` touch. With
@@ -561,6 +761,12 @@ impl SelfContactSolver {
             }
         }
     }
+}
+
+/// Whether `x` lies half the margin, `half`, or farther from the segment's box between
+/// `start` and `end` ([`SelfContactSolver::candidates_cover`]).
+fn beyond(x: Vec3, start: Vec3, end: Vec3, half: f32) -> bool {
+    x.distance_squared(x.clamp(start.min(end), start.max(end))) >= half * half
 }
 
 /// The box around `vertices` at `x0` and at `x1`.
@@ -1079,6 +1285,46 @@ mod tests {
             assert!(touching > 50, "{fall}: {touching} pairs within their separation: the test tests something");
             assert!(solver.pairs.len() < all.len() / 4, "{fall}: {} of {} pairs listed", solver.pairs.len(), all.len());
         }
+    }
+
+    /// A few vertices leaving their listed sweeps are listed again alone, and the list is
+    /// then the one a whole listing over the positions they are listed for makes, pair for
+    /// pair and in its order; more than one vertex in [`MEND_SHARE`] is listed anew.
+    #[test]
+    fn mended_candidates_are_those_of_a_listing_of_where_the_vertices_are_listed_for() {
+        // A crumpled sheet of 4 mm squares, 2 mm separation, 4 mm margin, listed over
+        // short sweeps; then the whole sheet 5 cm away, and a few vertices 2.5 mm more at
+        // the step's start and 5 mm at its end, out of their listed sweeps (half the
+        // margin is 2 mm) however the motion common to all is taken.
+        let (mesh, flat) = grid_sheet(16, 0.004, 0.001);
+        let wave = |k: usize, a: f32| (k as f32 * a).sin();
+        let x1: Vec<Vec3> = flat.iter().enumerate().map(|(k, x)| *x + 0.003 * wave(k, 1.3) * Vec3::Y).collect();
+        let x0: Vec<Vec3> =
+            x1.iter().enumerate().map(|(k, x)| *x + 0.001 * Vec3::new(wave(k, 0.7), wave(k, 1.9), 0.0)).collect();
+        let shifted = |moved: &[usize], by: f32| {
+            let own = |k: usize| if moved.contains(&k) { by * Vec3::new(0.0, 0.8, -0.6) } else { Vec3::ZERO };
+            x1.iter().enumerate().map(|(k, x)| *x + Vec3::new(0.05, 0.0, 0.0) + own(k)).collect::<Vec<_>>()
+        };
+        let few = [17, 100, 101, 200];
+        let mut solver = SelfContactSolver::default();
+        solver.untangler.clear(mesh.len());
+        solver.candidates(&mesh, &x0, &x1);
+        assert!(solver.sweeps_listed);
+        let (start, end) = (shifted(&few, 0.0025), shifted(&few, 0.005));
+        assert!(solver.candidates_cover(&mesh, &start) && !solver.candidates_cover(&mesh, &end));
+        assert!(solver.mend(&mesh, &start, &end), "four vertices of 256 are mended");
+        assert!(solver.candidates_cover(&mesh, &start) && solver.candidates_cover(&mesh, &end));
+        let mended: Vec<usize> = (0..mesh.len()).filter(|&k| solver.moved[k]).collect();
+        assert_eq!(mended, few);
+        let mut fresh = SelfContactSolver::default();
+        fresh.untangler.clear(mesh.len());
+        fresh.candidates(&mesh, &solver.listed_start, &solver.listed_end);
+        assert!(fresh.sweeps_listed);
+        assert_eq!(solver.pairs, fresh.pairs, "the pairs of a listing where they are listed for");
+        let of_few = |pair: &Pair| pair_vertices(&mesh, *pair).iter().any(|&k| few.contains(&(k as usize)));
+        assert!(solver.pairs.iter().any(of_few));
+        let many: Vec<usize> = (0..=mesh.len() / MEND_SHARE).map(|k| 3 * k).collect();
+        assert!(!solver.mend(&mesh, &end, &shifted(&many, 0.01)), "{} vertices are listed anew", many.len());
     }
 
     #[test]
