@@ -538,9 +538,10 @@ impl SelfContactSolver {
     /// The motion most vertices share since the candidates were listed, to `x`: the
     /// median, axis by axis, of the displacements of [`TYPICAL_SAMPLES`] vertices spread
     /// over the mesh. The centre of [`SelfContactSolver::common_motion`] lies midway
-    /// between the extremes, so where a few vertices move away, every vertex at the other
-    /// extreme is as far from it as they are: a fold on sphere_64's resting sheet left 1
-    /// to 30 vertices beyond half the margin, but moved back by the centre, 100 to 250.
+    /// between the extremes, so where a few vertices move away, the vertices at the other
+    /// extreme are as far from it as they are. Mending around the centre instead, over
+    /// whole runs: sphere_64 1 976 mends against 974 (listing and mending 1.65 s against
+    /// 1.53), sphere_64_adaptive 244 listings against 211 (0.92 s against 0.81).
     fn typical_motion(&self, x: &[Vec3]) -> Vec3 {
         let stride = x.len().div_ceil(TYPICAL_SAMPLES).max(1);
         let mut samples = [0.0f32; TYPICAL_SAMPLES];
