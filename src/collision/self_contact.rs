@@ -217,7 +217,7 @@ pub struct SelfContactSolver {
     /// Candidate pairs whose swept boxes meet.
     pairs: Vec<Pair>,
     /// Where each vertex's sweep ended when the candidates were listed (or mended, moved
-    /// back by the motion common to all then, [`SelfContactSolver::mend`]).
+    /// back by the motion most vertices shared then, [`SelfContactSolver::mend`]).
     listed_end: Vec<Vec3>,
     /// Whether the candidates serve while each vertex stays near the box of its whole
     /// listed sweep, not only near its end: where no sweep of the listing was longer than
@@ -481,7 +481,9 @@ impl SelfContactSolver {
 
     /// Whether the candidates still cover the sweeps to `x1`: no end point, moved back by
     /// a motion common to all of them (the centre of the box of their displacements since
-    /// the listing's end), which brings no pair closer, lies farther than half the margin
+    /// the listing's end, [`SelfContactSolver::common_motion`], or else the motion most of
+    /// them share, [`SelfContactSolver::typical_motion`]), which brings no pair closer,
+    /// lies farther than half the margin
     /// from where it was listed for: its sweep's end, or where
     /// [`SelfContactSolver::sweeps_listed`] the box of its whole sweep. (A pair's swept
     /// boxes, so moved back, are then each within half the margin of those listed, so a
