@@ -228,11 +228,12 @@ pub struct SelfContactSolver {
     /// Whether some vertex was exempt (being untangled) when they were listed, which
     /// left its pairs out.
     listed_with_exemptions: bool,
-    /// The vertices [`SelfContactSolver::mend`] lists again, the pairs it finds, and
-    /// which vertices lie in a triangle.
+    /// The vertices [`SelfContactSolver::mend`] lists again, and the pairs it finds.
     moved: Vec<bool>,
     mended: Vec<Pair>,
-    in_triangle: Vec<bool>,
+    /// Whether every vertex lay in a triangle at the last listing: a mend finds the pairs
+    /// of a point that stayed through its triangles' boxes.
+    points_in_triangles: bool,
     /// Vertices a pass of continuous collision moved or left colliding.
     dirty: Vec<bool>,
     /// Proximity contacts among the candidates.
@@ -279,11 +280,13 @@ impl SelfContactSolver {
 
         // 1. Proximity at the start of the step. The last step's candidates still serve
         // while both ends of this step's sweeps are within half the margin of where they
-        // were listed for (see `candidates_cover`), as on cloth at rest, and none were left
-        // out for untangling.
+        // were listed for (see `candidates_cover`), as on cloth at rest, or once the few
+        // vertices that left are listed again (`mend`), and none were left out for
+        // untangling.
         let exemptions = self.untangler.watching() || self.listed_with_exemptions;
-        let covered = !exemptions && self.candidates_cover(mesh, x0) && self.candidates_cover(mesh, x1);
-        if !covered && (exemptions || !self.mend(mesh, x0, x1)) {
+        let kept = !exemptions
+            && (self.candidates_cover(mesh, x0) && self.candidates_cover(mesh, x1) || self.mend(mesh, x0, x1));
+        if !kept {
             self.candidates(mesh, x0, x1);
         }
         let pairs = &self.pairs;
@@ -432,9 +435,15 @@ impl SelfContactSolver {
         }
         self.listed_end.clear();
         self.listed_end.extend_from_slice(x1);
-        // Room for mending, made while warming up, not in a step long after.
+        // The triangles' vertices, marked in the mend's scratch: its room is made while
+        // warming up, not in a step long after, and the mesh is the same till the next
+        // listing.
+        self.moved.clear();
         self.moved.resize(x1.len(), false);
-        self.in_triangle.resize(x1.len(), false);
+        for &k in mesh.triangles.iter().flatten() {
+            self.moved[k as usize] = true;
+        }
+        self.points_in_triangles = !self.moved.contains(&false);
         let (triangle_tree, edge_tree) = (&self.triangle_tree, &self.edge_tree);
         let exempt = &self.untangler.exempt;
         let free = |vertices: &[u32]| !vertices.iter().any(|&k| exempt[k as usize]);
@@ -580,7 +589,12 @@ impl SelfContactSolver {
     /// [`MEND_SWEEP`] margins.
     fn mend(&mut self, mesh: &ContactMesh, x0: &[Vec3], x1: &[Vec3]) -> bool {
         let n = mesh.len();
-        if !self.sweeps_listed || self.listed_with_exemptions || self.listed_end.len() != n || x0.len() != n {
+        if !self.sweeps_listed
+            || self.listed_with_exemptions
+            || !self.points_in_triangles
+            || self.listed_end.len() != n
+            || x0.len() != n
+        {
             return false;
         }
         let gap = largest_gap(mesh);
@@ -597,14 +611,6 @@ impl SelfContactSolver {
             return true;
         }
         if count > n / MEND_SHARE {
-            return false;
-        }
-        self.in_triangle.clear();
-        self.in_triangle.resize(n, false);
-        for &k in mesh.triangles.iter().flatten() {
-            self.in_triangle[k as usize] = true;
-        }
-        if self.in_triangle.contains(&false) {
             return false;
         }
         self.moved.clear();
