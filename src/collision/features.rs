@@ -11,7 +11,8 @@
 //!   closer than the contact thickness, or whose paths met during the step (the
 //!   coplanarity cubic of [`Sweep`]), is pushed apart along the normal both primitives
 //!   share (the cross product of the two edges, or the cloth triangle's normal) to the
-//!   contact thickness, on the side the cloth came from;
+//!   contact thickness, on the side the cloth came from, or on the other where that one
+//!   lies inside the body (behind every face at the feature);
 //! - the push moves the cloth's vertices by their weights in the pair and their inverse
 //!   masses (pinned vertices stay), and its change of the step's mean velocity is added
 //!   to their velocities, as self-contact does.
@@ -58,8 +59,15 @@ pub struct SharpFeatures {
     points: Vec<Vec3>,
     /// Convex edges whose faces meet at more than 15°.
     edges: Vec<[u32; 2]>,
+    /// Each sharp edge's two faces' outward normals: the body near the edge lies behind
+    /// both.
+    edge_normals: Vec<[Vec3; 2]>,
     /// Vertices where sharp edges turn.
     corners: Vec<u32>,
+    /// The outward normals of the faces at the corners, each corner's in turn
+    /// (`corner_normal_ends` says where each ends).
+    corner_normals: Vec<Vec3>,
+    corner_normal_ends: Vec<u32>,
     edge_tree: Bvh,
     corner_tree: Bvh,
 }
@@ -97,20 +105,19 @@ impl SharpFeatures {
                 faces.entry([p.min(q), p.max(q)]).or_default().push(f);
             }
         }
-        let edges: Vec<[u32; 2]> = faces
+        let (edges, edge_normals): (Vec<[u32; 2]>, Vec<[Vec3; 2]>) = faces
             .into_iter()
-            .filter(|(edge, faces)| {
+            .filter_map(|(edge, faces)| {
                 let &[f, g] = faces.as_slice() else {
-                    return false;
+                    return None;
                 };
                 let (nf, ng) = (normal(triangles[f]), normal(triangles[g]));
                 // g's vertex off this edge lies below f's plane where the edge is convex.
                 let apex = triangles[g].into_iter().find(|k| !edge.contains(k)).expect("a triangle has a third vertex");
                 let convex = nf.dot(points[apex as usize] - points[edge[0] as usize]) < 0.0;
-                convex && nf.dot(ng) < SHARP_COS
+                (convex && nf.dot(ng) < SHARP_COS).then_some((edge, [nf, ng]))
             })
-            .map(|(edge, _)| edge)
-            .collect();
+            .unzip();
         if edges.is_empty() {
             return None;
         }
@@ -125,6 +132,24 @@ impl SharpFeatures {
             let at: Vec<Vec3> = edges.iter().filter(|e| e.contains(&k)).map(|&e| direction(e, k)).collect();
             at.iter().enumerate().any(|(i, a)| at[i + 1..].iter().any(|b| a.dot(*b).abs() < RIDGE_COS))
         });
+        let mut at_corner: BTreeMap<u32, Vec<Vec3>> = corners.iter().map(|&k| (k, Vec::new())).collect();
+        for &t in triangles {
+            for k in t {
+                if let Some(normals) = at_corner.get_mut(&k) {
+                    // A flat face made of several triangles counts once.
+                    let n = normal(t);
+                    if normals.iter().all(|m| m.dot(n) < RIDGE_COS) {
+                        normals.push(n);
+                    }
+                }
+            }
+        }
+        let mut corner_normals = Vec::new();
+        let mut corner_normal_ends = Vec::with_capacity(corners.len());
+        for normals in at_corner.into_values() {
+            corner_normals.extend(normals);
+            corner_normal_ends.push(corner_normals.len() as u32);
+        }
         let edge_boxes: Vec<Aabb> = edges.iter().map(|e| Aabb::around(e.iter().map(|&k| points[k as usize]))).collect();
         let corner_boxes: Vec<Aabb> = corners.iter().map(|&k| Aabb::around([points[k as usize]])).collect();
         Some(SharpFeatures {
@@ -132,7 +157,10 @@ impl SharpFeatures {
             corner_tree: Bvh::build(&corner_boxes),
             points,
             edges,
+            edge_normals,
             corners,
+            corner_normals,
+            corner_normal_ends,
         })
     }
 
@@ -144,6 +172,12 @@ impl SharpFeatures {
     /// Number of corners.
     pub fn corner_count(&self) -> usize {
         self.corners.len()
+    }
+
+    /// The outward normals of the faces at corner `k`.
+    fn corner_faces(&self, k: usize) -> &[Vec3] {
+        let start = k.checked_sub(1).map_or(0, |before| self.corner_normal_ends[before] as usize);
+        &self.corner_normals[start..self.corner_normal_ends[k] as usize]
     }
 }
 
@@ -313,6 +347,7 @@ impl SharpFeatures {
                 }
                 let point = p.lerp(q, u);
                 let normal = side((b0 - a0).cross(q - p), (b1 - a1).cross(q - p), a0.lerp(b0, s) - point)?;
+                let normal = outside(normal, &self.edge_normals[k as usize]);
                 let depth = thickness - normal.dot(a1.lerp(b1, s) - point);
                 (depth > 0.0).then_some(Push { vertices: [a, b, a], weights: [1.0 - s, s, 0.0], normal, depth })
             }
@@ -333,6 +368,7 @@ impl SharpFeatures {
                     return None;
                 }
                 let normal = side((b0 - a0).cross(c0 - a0), (b1 - a1).cross(c1 - a1), at(w, [a0, b0, c0]) - point)?;
+                let normal = outside(normal, self.corner_faces(k as usize));
                 let depth = thickness - normal.dot(at(w, [a1, b1, c1]) - point);
                 (depth > 0.0).then_some(Push { vertices: triangle, weights: w, normal, depth })
             }
@@ -352,6 +388,16 @@ fn side(start: Vec3, end: Vec3, offset: Vec3) -> Option<Vec3> {
     }
     let sign = before.signum() * start.dot(end).signum();
     Some(sign * end)
+}
+
+/// `normal`, or its opposite where it points into the body: behind every face at the
+/// feature (`faces`, their outward normals), where a push along it would leave the cloth
+/// inside. The side the cloth came from is inside where a step began with it already
+/// across the feature (its vertices put back onto the faces on either side of a rim, an
+/// edge between them left cutting the rim): held there, it stayed across for the rest of
+/// the run.
+fn outside(normal: Vec3, faces: &[Vec3]) -> Vec3 {
+    if faces.iter().all(|f| f.dot(normal) < 0.0) { -normal } else { normal }
 }
 
 #[cfg(test)]
@@ -407,6 +453,51 @@ mod tests {
         // both ends pushed alike, so about the edge's middle there is none.
         assert!((load.impulse - totals.impulse).length() < 1e-6);
         assert!(load.moment_about(x[0].lerp(x[1], 0.5)).length() < 1e-4 * given.length(), "{load:?}");
+    }
+
+    /// A cloth edge that begins a step already across a cube's edge (its middle 2 mm
+    /// inside the cube, its ends clear of it, as vertex contacts on the two faces leave
+    /// it) is pushed out to the contact thickness outside, not kept on the side it came
+    /// from.
+    #[test]
+    fn a_cloth_edge_left_across_a_cube_edge_is_pushed_out() {
+        let cube = cube();
+        let state = ColliderState { pose: parry3d::math::Pose3::IDENTITY, linear: Vec3::ZERO, angular: Vec3::ZERO };
+        let inside = 0.002;
+        let start = [Vec3::new(0.1, 0.8 - inside, 0.2 - inside), Vec3::new(0.1, 0.2 - inside, 0.8 - inside)];
+        let (mut x, mut v) = (start, [Vec3::ZERO; 2]);
+        let thickness = 0.005;
+        let cloth = ClothSurface { edges: &[[0, 1]], triangles: &[], free_inv_mass: &[1.0, 1.0], start: &start };
+        cube.resolve(&state, thickness, 0.01, cloth, &mut x, &mut v, &mut FeatureScratch::default());
+        let middle = x[0].lerp(x[1], 0.5) - Vec3::new(0.1, 0.5, 0.5);
+        let outward = Vec3::new(0.0, 1.0, 1.0).normalize();
+        assert!((middle.dot(outward) - thickness).abs() < 1e-4, "the edge's middle is {middle} off the cube's edge");
+    }
+
+    /// A cloth triangle that begins a step with a cube's corner 2 mm through it (its
+    /// vertices clear of the cube) is pushed out to the contact thickness over the corner.
+    #[test]
+    fn a_triangle_left_on_a_cube_corner_is_pushed_out() {
+        let cube = cube();
+        let state = ColliderState { pose: parry3d::math::Pose3::IDENTITY, linear: Vec3::ZERO, angular: Vec3::ZERO };
+        let (corner, normal) = (Vec3::splat(0.5), Vec3::ONE.normalize());
+        let u = Vec3::new(1.0, -1.0, 0.0).normalize();
+        let w = normal.cross(u);
+        let start = [0.0f32, 120.0, 240.0].map(|angle| {
+            let (sin, cos) = angle.to_radians().sin_cos();
+            corner - 0.002 * normal + 0.5 * (cos * u + sin * w)
+        });
+        let (mut x, mut v) = (start, [Vec3::ZERO; 3]);
+        let thickness = 0.005;
+        let cloth = ClothSurface {
+            edges: &[[0, 1], [1, 2], [0, 2]],
+            triangles: &[[0, 1, 2]],
+            free_inv_mass: &[1.0; 3],
+            start: &start,
+        };
+        cube.resolve(&state, thickness, 0.01, cloth, &mut x, &mut v, &mut FeatureScratch::default());
+        let over = (x[0] + x[1] + x[2]) / 3.0 - corner;
+        assert!((over.dot(normal) - thickness).abs() < 1e-4, "the triangle ends {over} off the corner");
     }
 
     /// A cube moving up into a resting cloth triangle meets it with its top corner, which
