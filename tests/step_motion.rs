@@ -225,26 +225,22 @@ fn self_contact_springs_are_made_over_when_the_frame_takes_another_number_of_ste
 /// sphere_64_adaptive (the bench scene sphere_64 with its steps following the motion,
 /// `step_motion: 0.25`, solved by multigrid) rests without crossing itself or the bodies,
 /// and without a lasting strain. Its rest is chaotic, so the strain is judged by the
-/// median of five starts (the bench's and 1 and 2 mm lower and higher), not by one. At one
-/// step a frame a particle that static friction holds on the ground is held for the
-/// whole frame while its neighbours slide, and the worst edge of that frame stretches:
-/// over the last 90 frames of fifteen starts within 4.5 mm (28 November 2026) the worst
-/// frame's strain was 0.035 to 0.518 (above 0.15 in one start: a single frame) and the
-/// median frame's 0.026 to 0.081 (above 0.06 in one). `min_substeps: 2` halves the
-/// hold: the worst 0.045 to 0.100 (above 0.08 in one), the median 0.025 to 0.066. A
-/// start's numbers move with any change of rounding as much as with its start: the
-/// bench's own start gave 0.052 at one step, where eight of the fifteen passed 0.09.
-/// Solved by block Jacobi instead, the three starts then judged had a median frame at one
-/// step of 0.072, which fails here; at the fixed ten steps of sphere_64 the worst was 0.023 to
-/// 0.060 (seven starts, 27 November 2026). Three starts were too few: a change of rounding
-/// alone (the multigrid's products finished run by run, 28 November 2026, eighth session)
-/// moved their median worst frame at one step from 0.132 to 0.199, where five starts
-/// gave medians of 0.139 before and 0.121 after; at two steps the five starts' worst
-/// frames were 0.032 to 0.090 before and 0.039 to 0.130 after (medians 0.072 and 0.109),
-/// so that bound is 0.12, the median frame's still 0.06.
+/// median of five starts (the bench's and 1 and 2 mm lower and higher), not by one.
+///
+/// Until the tenth session (28 November 2026) friction's take-back of the step's sliding
+/// for the push of the implicit step's constraint (`slide` in `collision::body_contact`)
+/// moved corners resting on the ground back by up to 2 mm after the solve, stretching
+/// their edges at every step at one step a frame. Over these five starts the worst of the
+/// last 90 frames was then 0.078 to 0.217 at one step (median 0.121) and 0.039 to 0.130
+/// at two (0.109), the median frame's median 0.041 and 0.036, and these bounds were 0.15,
+/// 0.12 and 0.06. Without it: the worst 0.023 to 0.130 (median 0.058) and 0.024 to 0.045
+/// (0.036), the median frame's median 0.045 and 0.032. What is left at one step is mostly
+/// a fold's layers, resting just beyond their separation, falling into each other in the
+/// solve and being pushed back by the contact stage (ARCHITECTURE, "Steps that follow the
+/// motion"); sphere_64 at its fixed ten steps rests at 0.023 to 0.028.
 #[test]
 fn sphere_64_rests_at_one_step_a_frame_or_more_without_crossing_or_a_lasting_strain() {
-    for (least, worst_bound) in [(1, 0.15), (2, 0.12)] {
+    for (least, worst_bound) in [(1, 0.1), (2, 0.06)] {
         let (mut typical, mut worst) = (Vec::new(), Vec::new());
         for height in [0.548, 0.549, 0.55, 0.551, 0.552] {
             let mut sim = common::bundled_with("bench/sphere_64_adaptive.ron", |scene| {

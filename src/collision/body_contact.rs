@@ -354,11 +354,11 @@ fn put_back(body: &ContactBody, near: Proximity, p: &mut Particle<'_>) -> (Vec3,
 /// held.
 ///
 /// A hold lasts a whole step, so at frame-sized steps a particle held while its
-/// neighbours slide stretches their edges until the next step lets it go: sphere_64 at
-/// one step a frame, its sheet creeping over the ground, stretched the edges at a held
-/// particle by a corner by 11 %. Letting go within the step and solving again, the
-/// particle free along the surface, slid it there without friction and was worse
-/// (ARCHITECTURE, "Steps that follow the motion").
+/// neighbours slide stretches their edges until the next step lets it go. (Much of the
+/// stretch at sphere_64's corners at one step a frame once put down to this came from
+/// the take-back of [`slide`], traced step by step in the tenth session.) Letting go
+/// within the step and solving again, the particle free along the surface, slid it
+/// there without friction and was worse (ARCHITECTURE, "Steps that follow the motion").
 fn hold(body: &ContactBody, near: Proximity, p: &Particle<'_>, totals: &mut ContactTotals) -> bool {
     let normal = p.support.dot(near.outward);
     let tangential = (p.support - normal * near.outward).length();
