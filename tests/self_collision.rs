@@ -81,8 +81,12 @@ fn a_stiff_strip_falling_in_folds_never_holds_more_energy_than_it_started_with()
 
 #[test]
 fn a_twisted_strip_coils_untangled() {
-    let (impacts, pairs) = run_untangled("twist.ron", None);
-    assert!(impacts > 100.0 && pairs > 100.0, "the strip wrung onto itself: {impacts} impacts, {pairs} pairs");
+    // Until the armed contact springs of the tenth session the contact stage met over a
+    // hundred continuous impacts here; now the solve stops the coils' layers before they
+    // meet, and none is left to it (196 pairs in contact at the most): the pairs show
+    // that the strip wrung onto itself.
+    let (_, pairs) = run_untangled("twist.ron", None);
+    assert!(pairs > 100.0, "the strip wrung onto itself: {pairs} pairs");
 }
 
 #[test]

@@ -372,9 +372,9 @@ pub fn implicit_step(
     }
     build_system(settings, h, dynamics, ws);
     ws.stages.assembly += assembly.elapsed();
-    // Where the springs' friction will be lagged from this solution, it need not be
-    // accurate: only the last lagged solve is.
-    let friction = contact_springs::have_friction(springs_of(settings, dynamics));
+    // Where the springs will be lagged from this solution (their friction, armed springs
+    // engaged), it need not be accurate: only the last lagged solve is.
+    let friction = contact_springs::lagged_from_solves(springs_of(settings, dynamics));
     let (tolerance, guide) = (settings.cg_tolerance, LAG_LOOSENING * settings.cg_tolerance);
     let first = if friction { guide } else { tolerance };
     let start = match starts_warm(settings) && projected_start(dynamics, settings, ws) {
