@@ -198,7 +198,7 @@ pub fn collide_cloths(
         // A spring's vertices are all of one cloth (the only ones its implicit step sees).
         let within = |s: &&ContactSpring| range.contains(&(s.stencil.vertices[0] as usize));
         touching.0.clear();
-        reserve_floored(&mut touching.0, springs.capacity());
+        reserve_floored(&mut touching.0, springs.len());
         touching.0.extend(springs.iter().filter(within).map(|s| {
             let stencil = Stencil { vertices: s.stencil.vertices.map(|k| k - offset as u32), ..s.stencil };
             ContactSpring { stencil, ..*s }

@@ -395,7 +395,7 @@ impl SelfContactSolver {
             self.candidates(mesh, x0, x1);
         }
         let pairs = &self.pairs;
-        self.spring_gather.run_at_most_one(pairs.len(), springs, |i, out| out.extend(spring(mesh, pairs[i], h, x1, v)));
+        self.spring_gather.run(pairs.len(), springs, |i, out| out.extend(spring(mesh, pairs[i], h, x1, v)));
     }
 
     /// How far an end point may move, beyond the motion common to all, while a candidate

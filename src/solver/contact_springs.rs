@@ -308,6 +308,29 @@ mod tests {
     }
 
     #[test]
+    fn an_armed_spring_engages_where_the_solution_brings_its_pair_within_its_gap() {
+        let (s, x) = spring();
+        let armed = ContactSpring { stiffness: 0.0, drag: 0.0, armed: s.stiffness, ..s };
+        let v = vec![Vec3::ZERO; 4];
+        // 2.5 mm up, beyond the 2 mm gap: it stays armed and gives no force.
+        let mut apart = x.clone();
+        apart[0].y = 0.0025;
+        let mut springs = [armed];
+        assert!(!lag_changes(&springs, &apart, &v));
+        let mut force = vec![Vec3::ZERO; 4];
+        add_forces(&springs, &apart, &v, &mut force);
+        assert!(force.iter().all(|f| *f == Vec3::ZERO));
+        // 1.5 mm up, within it: it engages, pushing k · 0.5 mm, with friction from that push.
+        let mut pressed = x.clone();
+        pressed[0].y = 0.0015;
+        assert!(lag_changes(&springs, &pressed, &v));
+        lag(&mut springs, &pressed, &v);
+        assert_eq!(springs[0].stiffness, s.stiffness);
+        assert!((springs[0].push(&pressed) - 0.025).abs() < 1e-6);
+        assert!(springs[0].drag > 0.0);
+    }
+
+    #[test]
     fn lagging_takes_the_push_and_sliding_at_the_solution_and_releases_a_spring_that_pulls() {
         let (s, x) = spring();
         // Slides at 0.5 m/s along x; 1.5 mm up, the spring pushes k · 0.5 mm = 0.025 N.

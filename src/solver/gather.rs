@@ -65,26 +65,6 @@ impl<T: Copy + Send + Sync> Gather<T> {
             into.extend_from_slice(chunk);
         }
     }
-
-    /// [`Gather::run`] for a `visit` that gives at most one item an index, with room made
-    /// first for all `n` in `into` and in every chunk: a list whose length swings from
-    /// step to step within the same indices (the self-contact springs, armed and not)
-    /// then grows only with `n`.
-    pub fn run_at_most_one(&mut self, n: usize, into: &mut Vec<T>, visit: impl Fn(usize, &mut Vec<T>) + Sync) {
-        let count = n.div_ceil(CHUNK).max(1);
-        if self.chunks.len() < count {
-            let missing = count - self.chunks.len();
-            reserve_floored(&mut self.chunks, missing);
-            self.chunks.resize_with(count, Vec::new);
-        }
-        for chunk in &mut self.chunks[..count] {
-            chunk.clear();
-            chunk.reserve(CHUNK);
-        }
-        into.clear();
-        reserve_floored(into, n);
-        self.run(n, into, visit);
-    }
 }
 
 #[cfg(test)]
