@@ -377,10 +377,10 @@ fn hold(body: &ContactBody, near: Proximity, p: &Particle<'_>, totals: &mut Cont
 /// removes itself (an impact) takes back sliding: the constraint's share slows the
 /// particle and no more, and the next step holds it fast if it stuck. Taking back that
 /// share too moved the particle alone, by up to `h μ support / m` (2 mm at one step a
-/// frame on sphere_64's corners, pressed some 20 times their weight), against neighbours the solve
-/// had balanced without it; the next solve pulled it out again, and the sheet at rest
-/// kept edges 5 to 14 % stretched, step after step (ARCHITECTURE, "Steps that follow the
-/// motion").
+/// frame on sphere_64's corners, pressed some 20 times their weight), against neighbours
+/// the solve had balanced without it; the next solve pulled it out again, and the sheet
+/// at rest kept edges 5 to 14 % stretched, step after step (ARCHITECTURE, "Steps that
+/// follow the motion").
 fn slide(body: &ContactBody, near: Proximity, p: &mut Particle<'_>, h: f32, totals: &mut ContactTotals) -> bool {
     let outward = near.outward;
     let (surface, relative) = put_back(body, near, p);

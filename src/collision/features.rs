@@ -144,6 +144,7 @@ impl SharpFeatures {
                 }
             }
         }
+        // In the map's order, which is the corners' (sorted above).
         let mut corner_normals = Vec::new();
         let mut corner_normal_ends = Vec::with_capacity(corners.len());
         for normals in at_corner.into_values() {
@@ -409,6 +410,16 @@ mod tests {
         SharpFeatures::of_shape(&shape).expect("a cube has sharp edges")
     }
 
+    /// A body at rest at the origin.
+    fn still() -> ColliderState {
+        ColliderState { pose: parry3d::math::Pose3::IDENTITY, linear: Vec3::ZERO, angular: Vec3::ZERO }
+    }
+
+    /// One free cloth triangle that starts the step at `start`.
+    fn one_triangle(start: &[Vec3; 3]) -> ClothSurface<'_> {
+        ClothSurface { edges: &[[0, 1], [1, 2], [0, 2]], triangles: &[[0, 1, 2]], free_inv_mass: &[1.0; 3], start }
+    }
+
     #[test]
     fn a_cube_has_twelve_edges_and_eight_corners_and_a_ball_none() {
         let cube = cube();
@@ -431,7 +442,7 @@ mod tests {
     #[test]
     fn a_cloth_edge_falling_across_a_cube_edge_is_kept_off_it() {
         let cube = cube();
-        let state = ColliderState { pose: parry3d::math::Pose3::IDENTITY, linear: Vec3::ZERO, angular: Vec3::ZERO };
+        let state = still();
         // Across the edge at y = z = 0.5 (along x): from over the top to beside the side.
         let start = [Vec3::new(0.1, 0.8, 0.45), Vec3::new(0.1, 0.45, 0.8)];
         let fall = Vec3::new(0.0, -0.15, -0.15);
@@ -462,7 +473,7 @@ mod tests {
     #[test]
     fn a_cloth_edge_left_across_a_cube_edge_is_pushed_out() {
         let cube = cube();
-        let state = ColliderState { pose: parry3d::math::Pose3::IDENTITY, linear: Vec3::ZERO, angular: Vec3::ZERO };
+        let state = still();
         let inside = 0.002;
         let start = [Vec3::new(0.1, 0.8 - inside, 0.2 - inside), Vec3::new(0.1, 0.2 - inside, 0.8 - inside)];
         let (mut x, mut v) = (start, [Vec3::ZERO; 2]);
@@ -479,7 +490,7 @@ mod tests {
     #[test]
     fn a_triangle_left_on_a_cube_corner_is_pushed_out() {
         let cube = cube();
-        let state = ColliderState { pose: parry3d::math::Pose3::IDENTITY, linear: Vec3::ZERO, angular: Vec3::ZERO };
+        let state = still();
         let (corner, normal) = (Vec3::splat(0.5), Vec3::ONE.normalize());
         let u = Vec3::new(1.0, -1.0, 0.0).normalize();
         let w = normal.cross(u);
@@ -489,12 +500,7 @@ mod tests {
         });
         let (mut x, mut v) = (start, [Vec3::ZERO; 3]);
         let thickness = 0.005;
-        let cloth = ClothSurface {
-            edges: &[[0, 1], [1, 2], [0, 2]],
-            triangles: &[[0, 1, 2]],
-            free_inv_mass: &[1.0; 3],
-            start: &start,
-        };
+        let cloth = one_triangle(&start);
         cube.resolve(&state, thickness, 0.01, cloth, &mut x, &mut v, &mut FeatureScratch::default());
         let over = (x[0] + x[1] + x[2]) / 3.0 - corner;
         assert!((over.dot(normal) - thickness).abs() < 1e-4, "the triangle ends {over} off the corner");
@@ -521,12 +527,7 @@ mod tests {
         let mut x = start;
         let mut v = [Vec3::ZERO; 3];
         let thickness = 0.005;
-        let cloth = ClothSurface {
-            edges: &[[0, 1], [1, 2], [0, 2]],
-            triangles: &[[0, 1, 2]],
-            free_inv_mass: &[1.0; 3],
-            start: &start,
-        };
+        let cloth = one_triangle(&start);
         cube.resolve(&state, thickness, h, cloth, &mut x, &mut v, &mut FeatureScratch::default());
         // The apex lies under the point with weights (¼, ¼, ½).
         let over = 0.25 * (x[0] + x[1]) + 0.5 * x[2];

@@ -374,15 +374,15 @@ pub fn implicit_step(
     ws.stages.assembly += assembly.elapsed();
     // Where the springs will be lagged from this solution (their friction, armed springs
     // engaged), it need not be accurate: only the last lagged solve is.
-    let friction = contact_springs::lagged_from_solves(springs_of(settings, dynamics));
+    let lagged = contact_springs::lagged_from_solves(springs_of(settings, dynamics));
     let (tolerance, guide) = (settings.cg_tolerance, LAG_LOOSENING * settings.cg_tolerance);
-    let first = if friction { guide } else { tolerance };
+    let first = if lagged { guide } else { tolerance };
     let start = match starts_warm(settings) && projected_start(dynamics, settings, ws) {
         true => Start::Projected,
         false => Start::Prescribed,
     };
     report.iterations += solve(dynamics, settings, start, first, x, h * theta, ws);
-    let mut accurate = !friction;
+    let mut accurate = !lagged;
     set_constraint_impulses(dynamics, settings, constraints, ws);
     // Bodies moved by the constraints' impulses: solve again, from the last solution, with
     // the velocities their balance asks for, until they settle.
@@ -404,7 +404,7 @@ pub fn implicit_step(
             set_constraint_impulses(dynamics, settings, constraints, ws);
         }
     }
-    if friction {
+    if lagged {
         for lag in 1..=FRICTION_LAGS {
             let lag_tolerance = if lag == FRICTION_LAGS { tolerance } else { guide };
             match lag_friction(dynamics, settings, lag_tolerance, constraints, x, v, h, ws) {
@@ -489,8 +489,9 @@ const FRICTION_LAGS: u32 = 3;
 /// `scenes/layer_slope.ron` slid as before.
 const LAG_LOOSENING: f32 = 30.0;
 
-/// Lags the contact springs' friction from the step's solution `ws.delta` and releases the
-/// springs that pull there ([`contact_springs::lag`]), then, unless that changes little,
+/// Lags the contact springs' friction from the step's solution `ws.delta`, releases the
+/// springs that pull there and engages the armed ones whose pair it brings within its gap
+/// ([`contact_springs::lag`]), then, unless that changes little,
 /// solves again from the solution to `tolerance` (IPC's lagged iterations). The friction
 /// the first solve met was lagged from the start of the step, whose pushes can be many
 /// times those the springs give. Returns the solve's iterations, or `None` when it did
