@@ -184,15 +184,18 @@ fn a_step_motion_beyond_an_edge_or_not_above_zero_and_a_floor_without_it_or_beyo
 }
 
 /// A self-contact spring restores `SPRING_RECOVERY` = 0.95 of its pair's missing gap in
-/// the step it serves, at rest and with no other force: `k h² w / (1 + k h² w)` for the
-/// pair's inverse mass `w`. The springs the last step left are made for its length; when
-/// the next frame takes another number of steps they must be made over, or a spring made
-/// at ten steps a frame serves a frame of one a hundred times too stiff.
+/// the step it serves, at rest and with no other force, `k h² w / (1 + k h² w)` for the
+/// pair's inverse mass `w`, in a step no longer than `SPRING_STEP` (2 ms); in a longer
+/// one it is as stiff as in that, `k h² w = 19 (h / SPRING_STEP)²`. The springs the last
+/// step left are made for its length; when the next frame takes another number of steps
+/// they must be made over, or a spring made at ten steps a frame serves a frame of one
+/// as if made for a step ten times shorter.
 #[test]
 fn self_contact_springs_are_made_over_when_the_frame_takes_another_number_of_steps() {
     use bevy_ecs::system::RunSystemOnce;
     use selvedge::components::{ClothTopology, SelfTouching};
     use selvedge::resources::StepSettings;
+    use selvedge::solver::contact_springs::SPRING_STEP;
     use selvedge::systems::substeps::plan_frame_steps;
 
     // The upper layer of layer_slope slides ever faster, so frames take ever more steps.
@@ -200,7 +203,7 @@ fn self_contact_springs_are_made_over_when_the_frame_takes_another_number_of_ste
         scene.solver.substeps = Some(20);
         scene.solver.step_motion = Some(0.02);
     });
-    let (mut checked, mut changes) = (0, 0);
+    let (mut checked, mut changes, mut longer) = (0, 0, 0);
     let mut last_dt = sim.world().resource::<StepSettings>().dt;
     for _ in 0..30 {
         sim.world_mut().run_system_once(plan_frame_steps).expect("the planner runs");
@@ -211,8 +214,10 @@ fn self_contact_springs_are_made_over_when_the_frame_takes_another_number_of_ste
         changes += usize::from(h != last_dt && !live.is_empty());
         for spring in live {
             let khw = spring.stiffness * h * h * spring.stencil.inverse_mass(&topology.free_inv_mass);
-            let recovery = khw / (1.0 + khw);
-            assert!((recovery - 0.95).abs() < 1e-4, "a spring restores {recovery} of its gap in a step of {h} s");
+            let (recovery, ratio) = (khw / (1.0 + khw), 19.0 * (h / h.min(SPRING_STEP)).powi(2));
+            let wanted = ratio / (1.0 + ratio);
+            assert!((recovery - wanted).abs() < 1e-4, "a spring restores {recovery} of its gap in a step of {h} s");
+            longer += usize::from(h > SPRING_STEP);
             checked += 1;
         }
         last_dt = h;
@@ -220,6 +225,7 @@ fn self_contact_springs_are_made_over_when_the_frame_takes_another_number_of_ste
     }
     assert!(changes >= 3, "the step changed only {changes} times with springs to make over");
     assert!(checked > 100, "only {checked} springs checked");
+    assert!(longer > 0 && longer < checked, "{longer} of {checked} springs served steps longer than SPRING_STEP");
 }
 
 /// sphere_64_adaptive (the bench scene sphere_64 with its steps following the motion,
@@ -240,9 +246,20 @@ fn self_contact_springs_are_made_over_when_the_frame_takes_another_number_of_ste
 /// `collision::self_contact`): the worst 0.023 to 0.120 (median 0.068) and 0.023 to 0.042
 /// (0.029), the median frame's median 0.032 and 0.029. sphere_64 at its fixed ten steps
 /// rests at 0.019 to 0.048 in its median frame (median 0.030).
+///
+/// Contact springs as stiff at a longer step as at one of `SPRING_STEP` (2 ms; until then
+/// made for each step's length, 69 times softer at one step a frame, so that a fold's
+/// layers resting on each other carried their load 1.5 mm into their 2 mm gap, and the
+/// contact stage pushed them back out vertex by vertex at every step; eleventh session):
+/// the median frame 0.021 to 0.025 at one step (median 0.024, against 0.023 to 0.066
+/// and 0.032 before) and 0.020 to 0.026 at two (0.023, against 0.029); the worst 0.026
+/// to 0.083 at one step (median 0.074, against 0.068: corners held on the ground by
+/// friction, not self contact) and 0.021 to 0.026 at two (0.023, against 0.029). The
+/// median frame's bound, 0.03, fails the softer springs at one step; the worst frame's at two
+/// steps is 0.04 (was 0.06).
 #[test]
 fn sphere_64_rests_at_one_step_a_frame_or_more_without_crossing_or_a_lasting_strain() {
-    for (least, worst_bound) in [(1, 0.1), (2, 0.06)] {
+    for (least, worst_bound) in [(1, 0.1), (2, 0.04)] {
         let (mut typical, mut worst) = (Vec::new(), Vec::new());
         for height in [0.548, 0.549, 0.55, 0.551, 0.552] {
             let mut sim = common::bundled_with("bench/sphere_64_adaptive.ron", |scene| {
@@ -280,7 +297,7 @@ fn sphere_64_rests_at_one_step_a_frame_or_more_without_crossing_or_a_lasting_str
             runs[runs.len() / 2]
         };
         let (typical, worst) = (median(typical), median(worst));
-        assert!(typical < 0.06, "{least}: the sheet at rest strains to {typical} in its median frame");
+        assert!(typical < 0.03, "{least}: the sheet at rest strains to {typical} in its median frame");
         assert!(worst < worst_bound, "{least}: the sheet at rest strains to {worst} in its worst frame");
     }
 }

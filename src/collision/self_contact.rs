@@ -31,7 +31,7 @@ use super::bvh::{Aabb, Bvh};
 use super::primitives::{Sweep, closest_between_segments, closest_on_triangle};
 use super::untangle::Untangler;
 use crate::solver::PARALLEL_MIN_LEN;
-use crate::solver::contact_springs::{ContactSpring, Stencil};
+use crate::solver::contact_springs::{ContactSpring, Stencil, spring_step};
 use crate::solver::elements::spring::outer;
 use crate::solver::gather::{Gather, reserve_floored};
 
@@ -93,7 +93,9 @@ impl ContactMesh {
 /// Fraction of the missing gap a proximity impulse restores in one step.
 const GAP_RECOVERY: f32 = 0.25;
 /// Fraction of the missing gap the contact springs of the next implicit step restore in
-/// it, of a pair at rest with no other force: `k h² / (m + k h²)` under implicit Euler.
+/// it, of a pair at rest with no other force: `k h² / (m + k h²)` under implicit Euler,
+/// for a step no longer than
+/// [`SPRING_STEP`](crate::solver::contact_springs::SPRING_STEP) (more in a longer one).
 const SPRING_RECOVERY: f32 = 0.95;
 /// `k h² / m` of the contact springs.
 const SPRING_RATIO: f32 = SPRING_RECOVERY / (1.0 - SPRING_RECOVERY);
@@ -939,7 +941,8 @@ fn proximity(mesh: &ContactMesh, pair: Pair, h: f32, x0: &[Vec3]) -> Option<Cont
 /// implicit step (see [`ContactSpring`]), if the pair is within one cloth and any of its
 /// vertices is free. Stiff enough to restore [`SPRING_RECOVERY`] of the missing gap
 /// within a step of length `h` on its own: `k = r m / h²` for the pair's effective mass
-/// `m = 1 / Σ (w² / m_k)`. Its friction is first lagged from the push at `x` and the
+/// `m = 1 / Σ (w² / m_k)`, and no softer than for a step of
+/// [`SPRING_STEP`](crate::solver::contact_springs::SPRING_STEP) ([`spring_step`]). Its friction is first lagged from the push at `x` and the
 /// velocities `v` ([`ContactSpring::lag_friction`]); the step lags it again from its own
 /// solution ([`crate::solver::contact_springs::lag`]).
 ///
@@ -971,7 +974,8 @@ fn spring(mesh: &ContactMesh, pair: Pair, h: f32, x: &[Vec3], v: &[Vec3]) -> Opt
     }
     let inv_mass = stencil.inverse_mass(&mesh.inv_mass);
     (inv_mass > 0.0).then(|| {
-        let stiffness = SPRING_RATIO / (inv_mass * h * h);
+        let made_for = spring_step(h);
+        let stiffness = SPRING_RATIO / (inv_mass * made_for * made_for);
         if distance >= gap {
             return ContactSpring { stencil, normal, gap, stiffness: 0.0, friction, drag: 0.0, armed: stiffness };
         }
