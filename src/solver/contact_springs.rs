@@ -73,9 +73,9 @@ pub const SPRING_STEP: f32 = 0.002;
 /// 2 ms leaves the springs of frames of ten steps at 60 frames a second (sphere_64,
 /// fold_64) as they were, to the bit. Over five starts of sphere_64_adaptive the sheet at
 /// rest strains 0.024 in its median frame, against 0.032 with springs made for each step
-/// and 0.035 with them as stiff as for 4 ms, for 20 to 28 % more iterations (the
-/// preconditioner holds only the springs' diagonal blocks; without those it took 60 %
-/// more).
+/// and 0.035 with them as stiff as for 4 ms, for 18 to 29 % more iterations (the
+/// preconditioner holds only the springs' diagonal blocks; without those it took 31 to
+/// 49 % more).
 pub fn spring_step(h: f32) -> f32 {
     h.min(SPRING_STEP)
 }
