@@ -942,9 +942,10 @@ fn proximity(mesh: &ContactMesh, pair: Pair, h: f32, x0: &[Vec3]) -> Option<Cont
 /// vertices is free. Stiff enough to restore [`SPRING_RECOVERY`] of the missing gap
 /// within a step of length `h` on its own: `k = r m / h²` for the pair's effective mass
 /// `m = 1 / Σ (w² / m_k)`, and no softer than for a step of
-/// [`SPRING_STEP`](crate::solver::contact_springs::SPRING_STEP) ([`spring_step`]). Its friction is first lagged from the push at `x` and the
-/// velocities `v` ([`ContactSpring::lag_friction`]); the step lags it again from its own
-/// solution ([`crate::solver::contact_springs::lag`]).
+/// [`SPRING_STEP`](crate::solver::contact_springs::SPRING_STEP) ([`spring_step`]). Its
+/// friction is first lagged from the push at `x` and the velocities `v`
+/// ([`ContactSpring::lag_friction`]); the step lags it again from its own solution
+/// ([`crate::solver::contact_springs::lag`]).
 ///
 /// A pair beyond its separation but within [`SPRING_REACH`] of them gets an armed spring
 /// instead: no stiffness in the step's first solve, and its stiffness where that solve

@@ -133,10 +133,10 @@ impl ContactSpring {
 
     /// Makes a spring made for a step of length `from` serve one of length `to` [s]: its
     /// stiffness scaled as if made for the new step (as `k h²` over the pair's mass, `h`
-    /// no longer than [`SPRING_STEP`]: [`spring_step`]). Its friction stays: it was lagged from
-    /// the force the pair carried, which does not depend on the step (a layer at rest
-    /// carries its weight), while the push of the rescaled spring at the same distance
-    /// would give a quarter of it when the step doubles. Without this, a spring made at
+    /// no longer than [`SPRING_STEP`]: [`spring_step`]). Its friction stays: it was
+    /// lagged from the force the pair carried, which does not depend on the step (a layer
+    /// at rest carries its weight), while the push of the rescaled spring at the same
+    /// distance would give a quarter of it when the step doubles. Without this, a spring made at
     /// the end of a frame of ten steps served the first of a frame of one as if made for a
     /// step ten times shorter, and one made there the next frame's ten steps as if made for
     /// one ten times longer.
