@@ -136,14 +136,15 @@ impl ContactSpring {
     /// no longer than [`SPRING_STEP`]: [`spring_step`]). Its friction stays: it was
     /// lagged from the force the pair carried, which does not depend on the step (a layer
     /// at rest carries its weight), while the push of the rescaled spring at the same
-    /// distance would give a quarter of it when the step doubles. Without this, a spring made at
-    /// the end of a frame of ten steps served the first of a frame of one as if made for a
-    /// step ten times shorter, and one made there the next frame's ten steps as if made for
-    /// one ten times longer.
+    /// distance would give a quarter of it when the step doubles. Without this, a spring
+    /// made at the end of a frame of ten steps served the first of a frame of one as if
+    /// made for a step ten times shorter, and one made there the next frame's ten steps as
+    /// if made for one ten times longer.
     pub fn restep(&mut self, from: f32, to: f32) {
-        let (from, to) = (spring_step(from), spring_step(to));
-        self.stiffness *= (from / to) * (from / to);
-        self.armed *= (from / to) * (from / to);
+        let ratio = spring_step(from) / spring_step(to);
+        let scale = ratio * ratio;
+        self.stiffness *= scale;
+        self.armed *= scale;
     }
 
     /// Sets the friction to Coulomb's for the push `push` [N] and the pair's velocities
