@@ -74,8 +74,9 @@ pub const SPRING_STEP: f32 = 0.002;
 /// fold_64) as they were, to the bit. Over five starts of sphere_64_adaptive the sheet at
 /// rest strains 0.024 in its median frame, against 0.032 with springs made for each step
 /// and 0.035 with them as stiff as for 4 ms, for 18 to 29 % more iterations (the
-/// preconditioner holds only the springs' diagonal blocks; without those it took 31 to
-/// 49 % more).
+/// multigrid's finest level holds only the springs' diagonal blocks; without those it
+/// took 31 to 49 % more; its coarse levels hold them whole since the twelfth session,
+/// [`super::coarse_springs`], which left these iterations as they were).
 pub fn spring_step(h: f32) -> f32 {
     h.min(SPRING_STEP)
 }
@@ -229,7 +230,7 @@ pub fn lagged_from_solves(springs: &[ContactSpring]) -> bool {
 /// engaged, or released). Armed springs are most of a heap's (fold_64: its products took
 /// 23 % longer over all of them).
 fn acting(springs: &[ContactSpring]) -> impl Iterator<Item = &ContactSpring> {
-    springs.iter().filter(|s| s.stiffness != 0.0 || s.drag != 0.0)
+    springs.iter().filter(|s| s.acts())
 }
 
 /// Adds the springs' forces at `(x, v)` to `force`.
@@ -262,8 +263,13 @@ pub struct Weights {
 }
 
 impl ContactSpring {
+    /// Whether the spring has stiffness or friction ([`acting`]).
+    pub fn acts(&self) -> bool {
+        self.stiffness != 0.0 || self.drag != 0.0
+    }
+
     /// The pair's block `(w_a w_b)`-free part: `a k n nᵀ + b c (I − n nᵀ)`.
-    fn block(&self, weights: Weights) -> Mat3 {
+    pub(crate) fn block(&self, weights: Weights) -> Mat3 {
         let normal = outer(self.normal, self.normal);
         (weights.stiffness * self.stiffness) * normal + (weights.drag * self.drag) * (Mat3::IDENTITY - normal)
     }
@@ -290,11 +296,16 @@ pub fn add_diagonal(
     pattern: &BlockPattern,
     matrix: &mut SymmetricBlockMatrix,
 ) {
+    for_diagonal(springs, weights, |i, block| *matrix.diagonal_mut(pattern, i) += block);
+}
+
+/// Calls `visit(vertex, block)` with each diagonal block of `a K + b C` (as
+/// [`add_diagonal`] adds them), spring by spring in order.
+pub fn for_diagonal(springs: &[ContactSpring], weights: Weights, mut visit: impl FnMut(usize, Mat3)) {
     for s in acting(springs) {
         let block = s.block(weights);
-        for k in 0..4 {
-            *matrix.diagonal_mut(pattern, s.stencil.vertices[k] as usize) +=
-                s.stencil.weights[k] * s.stencil.weights[k] * block;
+        for (&vertex, &weight) in s.stencil.vertices.iter().zip(&s.stencil.weights) {
+            visit(vertex as usize, weight * weight * block);
         }
     }
 }

@@ -753,6 +753,8 @@ fn solve(
     }
     let (pattern, couplings, springs) =
         (dynamics.pattern(), dynamics.constant_couplings(), springs_of(settings, dynamics));
+    // None where the cloth does not collide with itself: no step of it has springs.
+    let springs = (dynamics.contact_surface().is_some() || !springs.is_empty()).then_some(springs);
     let known = match start {
         Start::Zero => StartProduct::Zero,
         Start::Prescribed if ws.prescribed.is_empty() => StartProduct::Zero,
@@ -858,7 +860,7 @@ fn conjugate_gradient(
     pattern: &BlockPattern,
     couplings: Option<&ConstantCouplings>,
     hierarchy: Option<&Hierarchy>,
-    springs: &[ContactSpring],
+    springs: Option<&[ContactSpring]>,
     settings: &ImplicitSettings,
     tolerance: f32,
     x: &[Vec3],
@@ -884,10 +886,11 @@ fn conjugate_gradient(
     } = ws;
     let weights = *spring_weights;
     let system = StepSystem::with_couplings(pattern, system, couplings, -weights.stiffness);
+    let (possible, springs) = (springs.map(|springs| (springs, weights)), springs.unwrap_or_default());
     if !*prepared {
         let preparing = Instant::now();
         match hierarchy {
-            Some(hierarchy) => multigrid.prepare(hierarchy, system, filter, x),
+            Some(hierarchy) => multigrid.prepare(hierarchy, system, filter, x, possible),
             None => (0..filter.len())
                 .into_par_iter()
                 .with_min_len(PARALLEL_MIN_LEN)

@@ -2,6 +2,7 @@
 //! here touches the ECS, so every kernel can be tested and benchmarked on plain data.
 
 pub mod cfl;
+pub mod coarse_springs;
 pub mod contact_springs;
 pub mod descent;
 pub mod elements;

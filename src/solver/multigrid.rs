@@ -30,6 +30,15 @@
 //! translations alone the hang bench scenes took 45, 77 and 111 iterations a step at
 //! 64², 128² and 256² particles; with rotations 24, 45 and 63.
 //!
+//! Contact springs between layers of a heap couple vertices that no aggregate groups
+//! together. The finest level holds their diagonal blocks (in the system), the coarse
+//! levels the springs whole, as terms beside their Galerkin matrices
+//! ([`CoarseSprings`]): with the diagonal blocks alone, a coarse level took the motion of
+//! two layers together along their normal for as stiff as the springs, and could not
+//! correct it. fold_64 stepped as sphere_64_adaptive is (`step_motion: 0.25`, multigrid)
+//! took 497 312 iterations over its 180 frames with the diagonal blocks alone, 12 533
+//! with the springs whole (29 November 2026).
+//!
 //! The grouping depends only on the block pattern, so [`Hierarchy`] is built once per
 //! topology. The numbers ([`Multigrid`]) are kept from system to system: the system of a
 //! step differs little from the last one's, so only the finest smoother is rebuilt for
@@ -46,11 +55,14 @@
 use glam::{Mat3, Mat3A, Vec3, Vec3A, Vec4};
 use rayon::prelude::*;
 
+use super::coarse_springs::CoarseSprings;
+use super::contact_springs::{ContactSpring, Weights, for_diagonal};
 use super::elements::block::{block_product, by_parts, times};
 use super::elements::half::row_product;
 use super::elements::spring::{outer, skew};
 use super::elements::{BlockPattern, HalfBlock, StoredBlock, SymmetricBlockMatrix, WeightedCouplings};
 use super::filter::{Filters, free_inverse};
+use super::gather::{FLOOR, reserve_floored};
 use super::implicit::StepSystem;
 use super::pipeline::pipelined;
 use super::{PARALLEL_MIN_LEN, add_rows};
@@ -413,6 +425,8 @@ struct Level {
     coarse_correction: Vec<Vec3>,
     /// The restriction's chunks' sums.
     restricted: Vec<Vec3>,
+    /// The products with the level's springs' terms.
+    coupled: Coupled,
 }
 
 /// Levels of at least this many rows keep their prolongator in bfloat16 ([`HalfBlock`]):
@@ -449,6 +463,14 @@ impl Prolongation {
         match self {
             Self::Full(blocks) => blocks.len(),
             Self::Half(blocks) => blocks.len(),
+        }
+    }
+
+    /// Block `s` as stored.
+    fn block(&self, s: usize) -> Mat3 {
+        match self {
+            Self::Full(blocks) => blocks[s],
+            Self::Half(blocks) => Mat3::from(blocks[s].get()),
         }
     }
 
@@ -580,6 +602,15 @@ fn set_dense(f: &mut [f64], m: usize, i: usize, j: usize, block: Mat3) {
     }
 }
 
+/// Adds `block` to block `(i, j)` of the dense `m × m` matrix `f` ([`set_dense`]).
+fn add_dense(f: &mut [f64], m: usize, i: usize, j: usize, block: Mat3) {
+    for (c, column) in [block.x_axis, block.y_axis, block.z_axis].iter().enumerate() {
+        for (r, value) in column.to_array().iter().enumerate() {
+            f[(3 * i + r) * m + 3 * j + c] += f64::from(*value);
+        }
+    }
+}
+
 /// Factors the symmetric `m × m` matrix `f` (row-major) in place into its lower Cholesky
 /// factor. An unknown the matrix does not reach (a pinned aggregate, a rotation dropped
 /// from a frame, a motion a contact's filter takes out) is dropped: its column is zeroed,
@@ -648,6 +679,11 @@ pub struct Multigrid {
     /// Matrices of the levels below the finest (whose matrix is `fine`), stored on and
     /// above their diagonals.
     matrices: Vec<SymmetricBlockMatrix>,
+    /// Per level below the finest, the contact springs' terms beside its matrix.
+    couplings: Vec<CoarseSprings>,
+    /// Per particle, the springs' diagonal blocks in the system, which the Galerkin
+    /// product leaves out; empty where the cloth does not collide with itself.
+    spring_diagonal: Vec<Mat3>,
     /// Scratch of the levels' setup, one level at a time: two chunks of [`PRODUCT_ROWS`]
     /// rows of `A S P` ([`Level::galerkin`]). It held the rotation blocks of the filtered
     /// tentative prolongator `S P₀` too, a block a particle, until they were formed where
@@ -813,6 +849,10 @@ struct Operator<'a> {
     /// instead of a lumped copy of them ([`Multigrid::prepare`]).
     lumps: Option<WeightedCouplings<'a>>,
     filter: Option<&'a Filters>,
+    /// On a coarse level of a system with contact springs, their terms beside the
+    /// Galerkin matrix ([`CoarseSprings`]): in the level's products, diagonal blocks and
+    /// direct solve, not in [`Operator::for_row`].
+    springs: Option<&'a CoarseSprings>,
 }
 
 /// The finest level's operator, within the constraint filter: `fine`, the system lumped
@@ -826,15 +866,23 @@ fn finest_operator<'a>(
     filter: &'a Filters,
 ) -> Operator<'a> {
     match (system.far, &hierarchy.fine) {
-        (None, Some(pattern)) => Operator { pattern, matrix: fine, lumps: None, filter: Some(filter) },
-        (far, _) => Operator { pattern: system.pattern, matrix: system.matrix, lumps: far, filter: Some(filter) },
+        (None, Some(pattern)) => Operator { pattern, matrix: fine, lumps: None, filter: Some(filter), springs: None },
+        (far, _) => {
+            Operator { pattern: system.pattern, matrix: system.matrix, lumps: far, filter: Some(filter), springs: None }
+        }
     }
 }
 
 /// A coarse level's operator: its Galerkin `matrix` over the `coarse` pattern, which no
-/// filter restricts (the finest level's is in the prolongator).
-fn coarse_operator<'a>(coarse: &'a BlockPattern, matrix: &'a SymmetricBlockMatrix) -> Operator<'a> {
-    Operator { pattern: coarse, matrix, lumps: None, filter: None }
+/// filter restricts (the finest level's is in the prolongator), and the contact
+/// `springs`' terms beside it, if there are any.
+fn coarse_operator<'a>(
+    coarse: &'a BlockPattern,
+    matrix: &'a SymmetricBlockMatrix,
+    springs: &'a CoarseSprings,
+) -> Operator<'a> {
+    let springs = (!springs.is_empty()).then_some(springs);
+    Operator { pattern: coarse, matrix, lumps: None, filter: None, springs }
 }
 
 impl Operator<'_> {
@@ -869,20 +917,28 @@ impl Operator<'_> {
         self.filter.map_or_else(|| free_inverse(diagonal), |f| f.inverse(i, diagonal))
     }
 
-    /// Node `i`'s diagonal block, the lumps' shift on it, read where it is stored.
+    /// Node `i`'s diagonal block, the lumps' shift and the springs' terms on it, read
+    /// where it is stored.
     fn diagonal(&self, i: usize) -> Mat3 {
-        self.matrix.diagonal(self.pattern, i) + Mat3::from_diagonal(Vec3::splat(self.shift(i)))
+        let springs = self.springs.map_or(Mat3::ZERO, |springs| springs.own(i));
+        self.matrix.diagonal(self.pattern, i) + Mat3::from_diagonal(Vec3::splat(self.shift(i))) + springs
     }
 
-    /// Block `(row, column)` of the matrix, zero where the pattern has none.
+    /// Block `(row, column)` of the operator, the springs' terms within a pair (rows
+    /// `2p`, `2p + 1`) with it, zero where the pattern has none.
     fn block(&self, row: u32, column: u32) -> Mat3 {
         match row == column {
             true => self.diagonal(row as usize),
+            false if column == row ^ 1 && self.springs.is_some() => {
+                self.matrix.block(self.pattern, row, column)
+                    + self.springs.map_or(Mat3::ZERO, |s| s.partner(row as usize))
+            }
             false => self.matrix.block(self.pattern, row, column),
         }
     }
 
-    /// Calls `visit(column, block)` for every block of row `i`, columns ascending.
+    /// Calls `visit(column, block)` for every block of row `i`, columns ascending: the
+    /// matrix with its lumps, without the springs' terms.
     #[inline]
     fn for_row(&self, i: usize, mut visit: impl FnMut(u32, Mat3)) {
         self.matrix.for_row(self.pattern, i, |j, block, _| match j as usize == i {
@@ -899,17 +955,49 @@ impl Operator<'_> {
         if self.lumps.is_some() {
             add_rows(out, |i| self.shift(i) * x[i]);
         }
+        if let Some(springs) = self.springs {
+            let (mut pushes, mut coupled) = (Vec::new(), vec![Vec3::ZERO; x.len()]);
+            springs.product(x, &mut pushes, &mut coupled);
+            add_rows(out, |i| coupled[i]);
+        }
     }
 
     /// `out = S (r − A z)`: the product, each stored block read once, and the difference
-    /// formed as each run of its rows is whole.
-    fn residual(&self, r: &[Vec3], z: &mut [Vec3], out: &mut [Vec3]) {
+    /// formed as each run of its rows is whole; the springs' terms, if any, formed first
+    /// into `coupled`.
+    fn residual(&self, r: &[Vec3], z: &mut [Vec3], out: &mut [Vec3], coupled: &mut Coupled) {
+        let springs = coupled.form(self, z);
         self.matrix.multiply_then(self.pattern, z, out, &mut vec![(); r.len()], |first, z, out, _| {
             for (k, (out, z)) in out.iter_mut().zip(z.iter()).enumerate() {
                 let i = first + k;
-                *out = self.filtered(i, r[i] - *out - self.shift(i) * *z);
+                let springs = springs.map_or(Vec3::ZERO, |s| s[i]);
+                *out = self.filtered(i, r[i] - *out - self.shift(i) * *z - springs);
             }
         });
+    }
+}
+
+/// A level's product with its springs' terms ([`CoarseSprings::product`]) and the
+/// pushes it keeps.
+#[derive(Debug, Clone, Default)]
+struct Coupled {
+    product: Vec<Vec3>,
+    pushes: Vec<Vec3>,
+}
+
+impl Coupled {
+    /// Room for a level of `rows` nodes and [`FLOOR`] springs.
+    fn reserve(&mut self, rows: usize) {
+        self.product.resize(rows, Vec3::ZERO);
+        reserve_floored(&mut self.pushes, FLOOR);
+    }
+
+    /// The springs' terms of `a` times `x`, if it has any.
+    fn form(&mut self, a: &Operator, x: &[Vec3]) -> Option<&[Vec3]> {
+        let springs = a.springs?;
+        self.product.resize(x.len(), Vec3::ZERO);
+        springs.product(x, &mut self.pushes, &mut self.product);
+        Some(&self.product)
     }
 }
 
@@ -1113,6 +1201,7 @@ impl Level {
             }
             // x ← D⁻¹ A x / |x|, each run of rows as soon as its product is whole.
             let inverse = &self.inverse;
+            let springs = self.coupled.form(&a, &self.dominant);
             a.matrix.multiply_then(
                 a.pattern,
                 &mut self.dominant,
@@ -1120,7 +1209,7 @@ impl Level {
                 &mut vec![(); n],
                 |first, x, ax, _| {
                     for (k, (ax, x)) in ax.iter_mut().zip(x.iter()).enumerate() {
-                        *ax += a.shift(first + k) * *x;
+                        *ax += a.shift(first + k) * *x + springs.map_or(Vec3::ZERO, |s| s[first + k]);
                     }
                     for (k, x) in x.iter_mut().enumerate() {
                         *x = inverse.apply(first + k, |m| ax[m - first]) / norm as f32;
@@ -1252,10 +1341,18 @@ impl Level {
     /// the chunk before is added into the coarse matrix: fine row `r` adds
     /// `(S P)_rRᵀ (A S P)_r` to each coarse row `R` of its row of `S P`, rows in order, so
     /// each coarse block sums its terms in fine-row order on any number of threads.
-    fn galerkin(&self, a: Operator, coarsening: &Coarsening, out: &mut SymmetricBlockMatrix, buffer: &mut Vec<Mat3>) {
+    /// The diagonal blocks `less` (one a node, or none) are left out of `A`.
+    fn galerkin(
+        &self,
+        a: Operator,
+        coarsening: &Coarsening,
+        less: &[Mat3],
+        out: &mut SymmetricBlockMatrix,
+        buffer: &mut Vec<Mat3>,
+    ) {
         match &self.prolongation {
-            Prolongation::Full(blocks) => galerkin_over(a, coarsening, blocks, out, buffer),
-            Prolongation::Half(blocks) => galerkin_over(a, coarsening, blocks, out, buffer),
+            Prolongation::Full(blocks) => galerkin_over(a, coarsening, blocks, less, out, buffer),
+            Prolongation::Half(blocks) => galerkin_over(a, coarsening, blocks, less, out, buffer),
         }
     }
 
@@ -1279,16 +1376,14 @@ impl Level {
             }
             // Each run of rows updated as soon as its product is whole.
             let lumped = a.lumps.is_some();
-            a.matrix.multiply_then(
-                a.pattern,
-                z,
-                &mut self.scratch,
-                &mut self.step,
-                |first, z, az, step| match lumped {
-                    true => update.rows(first, z, step, |i, z| r[i] - az[i - first] - a.shift(i) * z),
-                    false => update.rows(first, z, step, |i, _| r[i] - az[i - first]),
-                },
-            );
+            let springs = self.coupled.form(&a, z);
+            a.matrix.multiply_then(a.pattern, z, &mut self.scratch, &mut self.step, |first, z, az, step| {
+                match (lumped, springs) {
+                    (true, _) => update.rows(first, z, step, |i, z| r[i] - az[i - first] - a.shift(i) * z),
+                    (false, Some(s)) => update.rows(first, z, step, |i, _| r[i] - az[i - first] - s[i]),
+                    (false, None) => update.rows(first, z, step, |i, _| r[i] - az[i - first]),
+                }
+            });
         }
     }
 }
@@ -1298,6 +1393,7 @@ fn galerkin_over<B: StoredBlock>(
     a: Operator,
     coarsening: &Coarsening,
     prolongation: &[B],
+    less: &[Mat3],
     out: &mut SymmetricBlockMatrix,
     buffer: &mut Vec<Mat3>,
 ) {
@@ -1312,6 +1408,10 @@ fn galerkin_over<B: StoredBlock>(
         blocks.fill(Mat3::ZERO);
         ap.fill_row_range(1, rows, blocks, &|i, columns, blocks| {
             a.for_row(i, |node, block| {
+                let block = match less.get(i) {
+                    Some(less) if node as usize == i => block - *less,
+                    _ => block,
+                };
                 let mut at = 0;
                 for s in p.slots(node as usize) {
                     add_at(
@@ -1437,7 +1537,29 @@ impl Multigrid {
     /// ([`ConstantCouplings`](super::elements::ConstantCouplings)), its pattern is the
     /// finest level's, and the finest level is the system itself with their lumps, known
     /// ahead, on its diagonal: no copy (144 bytes a particle).
-    pub fn prepare(&mut self, hierarchy: &Hierarchy, system: StepSystem<'_>, filter: &Filters, positions: &[Vec3]) {
+    ///
+    /// The contact `springs`, with the weights of their blocks in the system, enter the
+    /// coarse levels whole, as terms beside their Galerkin matrices ([`CoarseSprings`]),
+    /// formed for every system with the coarse smoothers and the coarsest factor. `None`
+    /// where the system's cloth does not collide with itself, so that no spring will
+    /// come: the levels then keep nothing for them, where otherwise they keep room for
+    /// them from the first system on, so that contact starting in a warm frame allocates
+    /// nothing.
+    pub fn prepare(
+        &mut self,
+        hierarchy: &Hierarchy,
+        system: StepSystem<'_>,
+        filter: &Filters,
+        positions: &[Vec3],
+        springs: Option<(&[ContactSpring], Weights)>,
+    ) {
+        let had_springs = self.couplings.iter().any(|c| !c.is_empty());
+        let acting = springs.is_some_and(|(springs, _)| springs.iter().any(ContactSpring::acts));
+        self.spring_diagonal.clear();
+        if let Some((springs, weights)) = springs {
+            self.spring_diagonal.resize(system.pattern.rows(), Mat3::ZERO);
+            for_diagonal(springs, weights, |i, block| self.spring_diagonal[i] += block);
+        }
         match (system.far, &hierarchy.fine) {
             (None, Some(fine)) => lump(system.pattern, system.matrix, fine, &mut self.shifts, &mut self.fine),
             _ => self.fine = SymmetricBlockMatrix::default(),
@@ -1455,10 +1577,29 @@ impl Multigrid {
             Some(finest) if built && !self.rebuild => {
                 finest.smoother(finest_operator(hierarchy, &self.fine, system, filter), false);
                 self.prolongators_new = false;
+                if had_springs || acting {
+                    self.follow_springs(hierarchy, springs);
+                }
             }
-            Some(_) if built && self.prolongators_new => self.setup(hierarchy, system, filter, None),
+            Some(_) if built && self.prolongators_new => self.setup(hierarchy, system, filter, None, springs),
             // Stale, another hierarchy, or a single level (the system is the coarsest).
-            _ => self.setup(hierarchy, system, filter, Some(positions)),
+            _ => self.setup(hierarchy, system, filter, Some(positions), springs),
+        }
+    }
+
+    /// With the coarse levels kept, forms the springs' terms for this system, and with
+    /// them the coarse smoothers and the coarsest factor.
+    fn follow_springs(&mut self, hierarchy: &Hierarchy, springs: Option<(&[ContactSpring], Weights)>) {
+        let depth = hierarchy.coarsenings.len();
+        for l in 0..depth {
+            let (finer, coarser) = self.couplings.split_at_mut(l);
+            let coarsening = &hierarchy.coarsenings[l];
+            restrict_springs(coarsening, &self.levels[l].prolongation, finer.last(), springs, &mut coarser[0]);
+            let a = coarse_operator(&coarsening.coarse, &self.matrices[l], &self.couplings[l]);
+            match self.levels.get_mut(l + 1) {
+                Some(level) => level.smoother(a, hierarchy.coarsenings[l + 1].paired),
+                None => self.coarsest.factorize(a),
+            }
         }
     }
 
@@ -1489,7 +1630,14 @@ impl Multigrid {
     /// Builds the levels' smoothers and matrices, and the coarsest factor, from the finest
     /// level's matrix, and with the particles' `positions` the prolongators first (else
     /// the last ones are kept).
-    fn setup(&mut self, hierarchy: &Hierarchy, system: StepSystem<'_>, filter: &Filters, positions: Option<&[Vec3]>) {
+    fn setup(
+        &mut self,
+        hierarchy: &Hierarchy,
+        system: StepSystem<'_>,
+        filter: &Filters,
+        positions: Option<&[Vec3]>,
+        springs: Option<(&[ContactSpring], Weights)>,
+    ) {
         self.rebuild = false;
         self.fresh_iterations = None;
         self.tried_stale = false;
@@ -1497,12 +1645,14 @@ impl Multigrid {
         let depth = hierarchy.coarsenings.len();
         self.levels.resize_with(depth, Level::default);
         self.matrices.resize_with(depth, SymmetricBlockMatrix::default);
+        self.couplings.resize_with(depth, CoarseSprings::default);
         let finest = finest_operator(hierarchy, &self.fine, system, filter);
         for (l, coarsening) in hierarchy.coarsenings.iter().enumerate() {
             let (above, below) = self.matrices.split_at_mut(l);
+            let (finer_springs, springs_below) = self.couplings.split_at_mut(l);
             let a = match l {
                 0 => finest,
-                _ => coarse_operator(&hierarchy.coarsenings[l - 1].coarse, &above[l - 1]),
+                _ => coarse_operator(&hierarchy.coarsenings[l - 1].coarse, &above[l - 1], &finer_springs[l - 1]),
             };
             let (finer, level) = self.levels.split_at_mut(l);
             let level = &mut level[0];
@@ -1515,14 +1665,26 @@ impl Multigrid {
                 level.rigid_motions(coarsening, points);
                 level.prolongator(a, coarsening, points);
             }
-            level.galerkin(a, coarsening, &mut below[0], &mut self.blocks);
+            // The springs' diagonal blocks are in the finest level's matrix: left out of
+            // the Galerkin product, as the springs are whole in their terms.
+            let less = if l == 0 { &self.spring_diagonal[..] } else { &[] };
+            level.galerkin(a, coarsening, less, &mut below[0], &mut self.blocks);
+            restrict_springs(coarsening, &level.prolongation, finer_springs.last(), springs, &mut springs_below[0]);
             let coarse = coarsening.coarse.rows();
+            // The finest level's springs are in its matrix.
+            if springs.is_some() && l > 0 {
+                level.coupled.reserve(a.pattern.rows());
+            }
             level.coarse_residual.resize(coarse, Vec3::ZERO);
             level.coarse_correction.resize(coarse, Vec3::ZERO);
         }
         let coarsest = match depth {
             0 => finest,
-            _ => coarse_operator(&hierarchy.coarsenings[depth - 1].coarse, &self.matrices[depth - 1]),
+            _ => coarse_operator(
+                &hierarchy.coarsenings[depth - 1].coarse,
+                &self.matrices[depth - 1],
+                &self.couplings[depth - 1],
+            ),
         };
         self.coarsest.factorize(coarsest);
     }
@@ -1538,45 +1700,70 @@ impl Multigrid {
         z: &mut [Vec3],
     ) {
         let finest = finest_operator(hierarchy, &self.fine, system, filter);
-        cycle(&mut self.levels, &hierarchy.coarsenings, &self.matrices, &mut self.coarsest, finest, r, z);
+        let coarse = Coarse { coarsenings: &hierarchy.coarsenings, matrices: &self.matrices, springs: &self.couplings };
+        cycle(&mut self.levels, coarse, &mut self.coarsest, finest, r, z);
+    }
+}
+
+/// Sets `out` to the springs' terms on the coarse level of `coarsening`, through the
+/// prolongator from it: from the `finer` level's terms, or from the `springs` and their
+/// weights below the finest level; none where the system has no springs to come.
+fn restrict_springs(
+    coarsening: &Coarsening,
+    prolongation: &Prolongation,
+    finer: Option<&CoarseSprings>,
+    springs: Option<(&[ContactSpring], Weights)>,
+    out: &mut CoarseSprings,
+) {
+    let p = &coarsening.prolongation;
+    let row = |i: usize, visit: &mut dyn FnMut(u32, Mat3)| {
+        for s in p.slots(i) {
+            visit(p.columns[s], prolongation.block(s));
+        }
+    };
+    let nodes = coarsening.coarse.rows();
+    match (springs, finer) {
+        (None, _) => out.clear_terms(),
+        (Some((springs, weights)), None) => out.restrict_springs(springs, weights, nodes, row),
+        (Some(_), Some(finer)) => out.restrict(finer, nodes, row),
     }
 }
 
 /// The V-cycle from the level of `a` down: smooth, restrict the residual, correct from
 /// the coarser level, prolongate, smooth again.
-fn cycle(
-    levels: &mut [Level],
-    coarsenings: &[Coarsening],
-    matrices: &[SymmetricBlockMatrix],
-    coarsest: &mut CoarsestSolver,
-    a: Operator,
-    r: &[Vec3],
-    z: &mut [Vec3],
-) {
+fn cycle(levels: &mut [Level], coarse: Coarse, coarsest: &mut CoarsestSolver, a: Operator, r: &[Vec3], z: &mut [Vec3]) {
     let Some((level, deeper)) = levels.split_first_mut() else {
         coarsest.solve(r, z);
         return;
     };
-    let coarsening = &coarsenings[0];
+    let coarsening = &coarse.coarsenings[0];
     level.smooth(a, r, z, true);
-    a.residual(r, z, &mut level.scratch);
+    a.residual(r, z, &mut level.scratch, &mut level.coupled);
     // r_c = (S P)ᵀ t, with t = S (r − A z).
     let Level { scratch, prolongation, coarse_residual, restricted, .. } = level;
     prolongation.restrict(&coarsening.restriction, &coarsening.prolongation, scratch, restricted, coarse_residual);
-    let below = coarse_operator(&coarsening.coarse, &matrices[0]);
-    cycle(
-        deeper,
-        &coarsenings[1..],
-        &matrices[1..],
-        coarsest,
-        below,
-        &level.coarse_residual,
-        &mut level.coarse_correction,
-    );
+    let below = coarse_operator(&coarsening.coarse, &coarse.matrices[0], &coarse.springs[0]);
+    cycle(deeper, coarse.deeper(), coarsest, below, &level.coarse_residual, &mut level.coarse_correction);
     // z += S P c, each row of `P c` added as it is formed.
     let (p, prolongation, correction) = (&coarsening.prolongation, &level.prolongation, &level.coarse_correction);
     add_rows(z, |i| a.filtered(i, prolongation.row_product(p, i, correction)));
     level.smooth(a, r, z, false);
+}
+
+/// The levels below one of the V-cycle's: their coarsenings, matrices and springs' terms,
+/// the first of each the next level's.
+#[derive(Clone, Copy)]
+struct Coarse<'a> {
+    coarsenings: &'a [Coarsening],
+    matrices: &'a [SymmetricBlockMatrix],
+    springs: &'a [CoarseSprings],
+}
+
+impl Coarse<'_> {
+    /// Those below the next level.
+    fn deeper(self) -> Self {
+        Coarse { coarsenings: &self.coarsenings[1..], matrices: &self.matrices[1..], springs: &self.springs[1..] }
+    }
 }
 
 impl CoarsestSolver {
@@ -1609,6 +1796,9 @@ impl CoarsestSolver {
                 set_dense(&mut self.factor, m, i, j, block);
             });
         }
+        if let Some(springs) = a.springs {
+            springs.for_blocks(|i, j, block| add_dense(&mut self.factor, m, i, j, block));
+        }
         cholesky(&mut self.factor, m);
     }
 
@@ -1636,6 +1826,7 @@ impl CoarsestSolver {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::solver::contact_springs::{Blocks, Stencil, add_diagonal, add_product};
     use crate::solver::elements::ConstantCouplings;
 
     /// An `n × n` grid of unit spacing, each quad split along one diagonal, as the system
@@ -1941,7 +2132,7 @@ mod tests {
         filter.constrain(1000, Mat3::IDENTITY - outer(Vec3::Y, Vec3::Y));
         let mut multigrid = Multigrid::default();
         let positions: Vec<Vec3> = (0..n as u32).map(|p| grid_position(side, p)).collect();
-        multigrid.prepare(&hierarchy, StepSystem::new(&pattern, &system), &filter, &positions);
+        multigrid.prepare(&hierarchy, StepSystem::new(&pattern, &system), &filter, &positions, None);
         check(&hierarchy, &multigrid);
         let apply = |multigrid: &mut Multigrid, r: &[Vec3]| {
             let mut z = vec![Vec3::ZERO; n];
@@ -1974,6 +2165,76 @@ mod tests {
     }
 
     #[test]
+    fn the_first_coarse_level_is_the_galerkin_product_of_the_system_with_its_contact_springs() {
+        // A 24² sheet folded in thought: springs join vertices of its two halves, far apart
+        // in the pattern, as a heap's layers are joined. The first coarse level, its
+        // Galerkin matrix with the springs' terms beside it, must be `(S P)ᵀ A (S P)` of the
+        // whole system, the springs' couplings in it, not their diagonal blocks alone.
+        let n_side = 24;
+        let (pattern, mut system) = sheet(n_side, 1.0, 1.0e3);
+        let hierarchy = Hierarchy::build(&pattern, &pattern, &pattern);
+        let n = pattern.rows();
+        let springs: Vec<ContactSpring> = (0..40u32)
+            .map(|k| {
+                let (row, column) = (k % 10, 2 + k / 10 * 4);
+                let (p, q) = (row * n_side + column, (n_side - 2 - row) * n_side + column);
+                let stencil = match k % 2 {
+                    0 => Stencil::point_triangle(p, [q, q + 1, q + n_side], [0.2, 0.5, 0.3]),
+                    _ => Stencil::edge_edge([p, p + 1], [q, q + n_side], 0.3, 0.6),
+                };
+                let normal = Vec3::new(0.1 * k as f32, 1.0, -0.2).normalize();
+                ContactSpring { stencil, normal, gap: 0.002, stiffness: 500.0, friction: 0.3, drag: 20.0, armed: 0.0 }
+            })
+            .collect();
+        let weights = Weights { stiffness: 0.5, drag: 0.1 };
+        add_diagonal(&springs, weights, &pattern, &mut system);
+        let positions: Vec<Vec3> = (0..n as u32).map(|p| grid_position(n_side, p)).collect();
+        let filter = Filters::free(n);
+        let mut multigrid = Multigrid::default();
+        multigrid.prepare(
+            &hierarchy,
+            StepSystem::new(&pattern, &system),
+            &filter,
+            &positions,
+            Some((&springs, weights)),
+        );
+        let (coarsening, level) = (&hierarchy.coarsenings[0], &multigrid.levels[0]);
+        let coarse = coarse_operator(&coarsening.coarse, &multigrid.matrices[0], &multigrid.couplings[0]);
+        assert!(coarse.springs.is_some());
+        let m = coarse.pattern.rows();
+        for seed in 0..4 {
+            let x: Vec<Vec3> = (0..m as u32).map(|c| irregular(c ^ seed)).collect();
+            let mut expected = vec![Vec3::ZERO; m];
+            let fine: Vec<Vec3> =
+                (0..n).map(|i| level.prolongation.row_product(&coarsening.prolongation, i, &x)).collect();
+            let mut product = vec![Vec3::ZERO; n];
+            system.multiply(&pattern, &fine, &mut product);
+            add_product(&springs, weights, Blocks::OffDiagonal, &fine, &mut product);
+            level.prolongation.restrict(
+                &coarsening.restriction,
+                &coarsening.prolongation,
+                &product,
+                &mut Vec::new(),
+                &mut expected,
+            );
+            let mut got = vec![Vec3::ZERO; m];
+            coarse.multiply(&x, &mut got);
+            let error = got.iter().zip(&expected).map(|(g, e)| (*g - *e).length()).fold(0.0, f32::max);
+            let scale = expected.iter().map(|e| e.length()).fold(0.0, f32::max);
+            assert!(error < 1e-4 * scale, "coarse product off by {error} of {scale}");
+            // Against the springs' diagonal blocks alone, it differs.
+            let mut diagonal_only = vec![Vec3::ZERO; n];
+            system.multiply(&pattern, &fine, &mut diagonal_only);
+            let apart = diagonal_only.iter().zip(&product).map(|(d, p)| (*d - *p).length()).fold(0.0, f32::max);
+            assert!(apart > 1e-2 * scale, "the springs' couplings moved the product by only {apart}");
+        }
+        // The smoother's pair blocks hold the springs' terms, and their inverses are right.
+        for p in 0..m / 2 {
+            assert_generalised_inverse(&pair_block(coarse, p), &pair_inverse(coarse, p));
+        }
+    }
+
+    #[test]
     fn a_sheet_held_to_a_tilted_plane_keeps_every_smoother_inverse_and_the_v_cycle_positive() {
         // A drape settled on a body: every particle held by a contact's filter to a plane
         // whose normal is no axis, so the aggregates' translations along the normal and
@@ -1989,9 +2250,9 @@ mod tests {
         }
         let positions: Vec<Vec3> = (0..n as u32).map(position).collect();
         let mut multigrid = Multigrid::default();
-        multigrid.prepare(&hierarchy, StepSystem::new(&pattern, &system), &filter, &positions);
+        multigrid.prepare(&hierarchy, StepSystem::new(&pattern, &system), &filter, &positions, None);
         // Each pair's inverse in the first paired level's smoother.
-        let coarse = coarse_operator(&hierarchy.coarsenings[0].coarse, &multigrid.matrices[0]);
+        let coarse = coarse_operator(&hierarchy.coarsenings[0].coarse, &multigrid.matrices[0], &multigrid.couplings[0]);
         for p in 0..coarse.pattern.rows() / 2 {
             assert_generalised_inverse(&pair_block(coarse, p), &pair_inverse(coarse, p));
         }
