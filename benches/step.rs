@@ -169,7 +169,7 @@ fn kernels(c: &mut Criterion) {
         let mut multigrid = Multigrid::default();
         multigrid.prepare(hierarchy, system_at, &filter, &x, None);
         group.bench_function(BenchmarkId::new("v_cycle", &size), |b| {
-            on_pool(b, || multigrid.apply(hierarchy, system_at, &filter, black_box(&rhs), &mut delta));
+            on_pool(b, || multigrid.apply(hierarchy, system_at, &filter, black_box(&rhs), &mut delta, None));
         });
         group.bench_function(BenchmarkId::new("descent_sweep", &size), |b| {
             on_pool(b, || {

@@ -907,7 +907,7 @@ fn conjugate_gradient(
     // z = M⁻¹ r, returning r·z.
     let precondition = |multigrid: &mut Multigrid, r: &[Vec3], z: &mut [Vec3], partials: &mut Vec<f64>| {
         if let Some(hierarchy) = hierarchy {
-            multigrid.apply(hierarchy, system, filter, r, z);
+            multigrid.apply(hierarchy, system, filter, r, z, possible);
         }
         let jacobi = hierarchy.is_none().then_some(&*preconditioner);
         fused(z, r, partials, |i, z, r| {
