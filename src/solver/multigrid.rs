@@ -982,6 +982,7 @@ impl Operator<'_> {
             add_rows(out, |i| self.shift(i) * x[i]);
         }
         let mut coupled = Coupled::default();
+        coupled.reset(x.len());
         if let Some(springs) = coupled.form(self, x) {
             add_rows(out, |i| springs[i]);
         }
@@ -1003,7 +1004,8 @@ impl Operator<'_> {
 }
 
 /// A level's product with its springs' part ([`SpringPart`]), and the pushes of a
-/// coarse level's terms ([`CoarseSprings::product`]).
+/// coarse level's terms ([`CoarseSprings::product`]). The product is zero but at the
+/// rows the springs reach, which each product sets: a heap's springs reach a few rows.
 #[derive(Debug, Clone, Default)]
 struct Coupled {
     product: Vec<Vec3>,
@@ -1011,18 +1013,19 @@ struct Coupled {
 }
 
 impl Coupled {
-    /// Room for a level of `rows` nodes and [`FLOOR`] springs.
-    fn reserve(&mut self, rows: usize) {
+    /// Zeroes the product for a level of `rows` nodes and new springs, and makes room for
+    /// [`FLOOR`] springs.
+    fn reset(&mut self, rows: usize) {
+        self.product.clear();
         self.product.resize(rows, Vec3::ZERO);
         reserve_floored(&mut self.pushes, FLOOR);
     }
 
     /// The springs' part of `a` times `x`, if it has one.
     fn form(&mut self, a: &Operator, x: &[Vec3]) -> Option<&[Vec3]> {
-        self.product.resize(x.len(), Vec3::ZERO);
         match a.springs? {
             SpringPart::Couplings(springs, weights) => {
-                self.product.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).for_each(|p| *p = Vec3::ZERO);
+                for_diagonal(springs, weights, |i, _| self.product[i] = Vec3::ZERO);
                 add_product(springs, weights, Blocks::OffDiagonal, x, &mut self.product);
             }
             SpringPart::Terms(terms) => terms.product(x, &mut self.pushes, &mut self.product),
@@ -1607,6 +1610,9 @@ impl Multigrid {
         let built = built_for(&self.levels);
         match self.levels.first_mut() {
             Some(finest) if built && !self.rebuild => {
+                if springs.is_some() {
+                    finest.coupled.reset(system.pattern.rows());
+                }
                 let couplings = springs.filter(|_| acting);
                 finest.smoother(finest_operator(hierarchy, &self.fine, system, filter, couplings), false);
                 self.prolongators_new = false;
@@ -1630,7 +1636,10 @@ impl Multigrid {
             restrict_springs(coarsening, &self.levels[l].prolongation, finer.last(), springs, &mut coarser[0]);
             let a = coarse_operator(&coarsening.coarse, &self.matrices[l], &self.couplings[l]);
             match self.levels.get_mut(l + 1) {
-                Some(level) => level.smoother(a, hierarchy.coarsenings[l + 1].paired),
+                Some(level) => {
+                    level.coupled.reset(a.pattern.rows());
+                    level.smoother(a, hierarchy.coarsenings[l + 1].paired);
+                }
                 None => self.coarsest.factorize(a),
             }
         }
@@ -1690,6 +1699,9 @@ impl Multigrid {
             };
             let (finer, level) = self.levels.split_at_mut(l);
             let level = &mut level[0];
+            if springs.is_some() {
+                level.coupled.reset(a.pattern.rows());
+            }
             level.smoother(a, coarsening.paired);
             if let Some(positions) = positions {
                 let points = match finer.last() {
@@ -1705,9 +1717,6 @@ impl Multigrid {
             level.galerkin(a, coarsening, less, &mut below[0], &mut self.blocks);
             restrict_springs(coarsening, &level.prolongation, finer_springs.last(), springs, &mut springs_below[0]);
             let coarse = coarsening.coarse.rows();
-            if springs.is_some() {
-                level.coupled.reserve(a.pattern.rows());
-            }
             level.coarse_residual.resize(coarse, Vec3::ZERO);
             level.coarse_correction.resize(coarse, Vec3::ZERO);
         }
