@@ -14,8 +14,8 @@ use crate::scene::{Scene, load_scene};
 use crate::solver::integrate::StageTimes;
 
 /// The benchmark scenes, in the order they run; each is `scenes/bench/<name>.ron`.
-pub const BENCH_SCENES: [&str; 7] =
-    ["hang_32", "hang_64", "hang_128", "hang_256", "sphere_64", "sphere_64_adaptive", "fold_64"];
+pub const BENCH_SCENES: [&str; 8] =
+    ["hang_32", "hang_64", "hang_128", "hang_256", "sphere_64", "sphere_64_adaptive", "fold_64", "fold_64_adaptive"];
 
 /// Frames run before timing starts (caches, workspaces and the first contacts settle):
 /// full runs and `--quick` ones.
