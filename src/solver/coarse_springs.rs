@@ -2,12 +2,12 @@
 //!
 //! A contact spring couples its pair's four vertices, `(w wᵀ) ⊗ B` for the stencil's
 //! weights `w` and the spring's 3 × 3 block `B` (its stiffness along the normal, its
-//! friction across it). The finest level holds only the diagonal blocks `w_k² B`, which
-//! is what a smoother needs; a coarse level needs the couplings too. Where two layers of
-//! a heap lie on each other, moving both together along the normal strains no spring,
-//! while the diagonal blocks alone make that motion as stiff as the springs, a thousand
-//! times the mass at a frame-sized step: the coarse levels, built from them, could not
-//! correct it.
+//! friction across it). The finest level's matrix holds the diagonal blocks `w_k² B`, for
+//! its smoother, and its products add the couplings; a coarse level needs the couplings
+//! too. Where two layers of a heap lie on each other, moving both together along the
+//! normal strains no spring, while the diagonal blocks alone make that motion as stiff as
+//! the springs, a thousand times the mass at a frame-sized step: coarse levels built from
+//! them alone could not correct it.
 //!
 //! Springs join vertices far apart in the cloth, whose aggregates no coarse pattern
 //! joins, so they stay beside each coarse level's Galerkin matrix as a sum of terms
