@@ -855,7 +855,8 @@ fn fused(
 /// iterations taken. Stops early on a direction of non-positive curvature, which a
 /// semi-definite assembly should not give. The vector work runs in parallel over fixed chunks of
 /// particles, each pass computing the dot products it needs on the way, summed in chunk
-/// order.
+/// order. `springs` is `None` where the cloth does not collide with itself, so that the
+/// multigrid keeps nothing for springs that will never come.
 fn conjugate_gradient(
     pattern: &BlockPattern,
     couplings: Option<&ConstantCouplings>,
