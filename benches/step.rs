@@ -167,7 +167,7 @@ fn kernels(c: &mut Criterion) {
         let hierarchy = topology.hierarchy(elements);
         let system_at = StepSystem::new(pattern, &system);
         let mut multigrid = Multigrid::default();
-        multigrid.prepare(hierarchy, system_at, &filter, &x, None);
+        multigrid.prepare(hierarchy, system_at, &filter, &x, None, false);
         group.bench_function(BenchmarkId::new("v_cycle", &size), |b| {
             on_pool(b, || multigrid.apply(hierarchy, system_at, &filter, black_box(&rhs), &mut delta, None));
         });

@@ -185,10 +185,10 @@ pub struct ImplicitWorkspace {
     warm_start: WarmStart,
     /// Whether the preconditioner (block Jacobi's inverses or the multigrid's levels) was
     /// prepared for the system as it is now. Building the system or changing its contact
-    /// springs clears it, so that the solves of one system (a loose one whose solution the
-    /// friction is lagged from, then the accurate one) prepare it once: on the first 60
+    /// springs makes it stale, so that the solves of one system (a loose one whose solution
+    /// the friction is lagged from, then the accurate one) prepare it once: on the first 60
     /// frames of sphere_64 with multigrid, the step prepared its preconditioner 2.5 times.
-    prepared: bool,
+    prepared: Prepared,
     /// Where the step's time has gone so far, for its report.
     stages: StageTimes,
     /// Impulse each contact constraint applied in the last step [N·s], parallel to the
@@ -547,7 +547,9 @@ fn add_springs(
 ) {
     let weights = Weights { stiffness: sign * ws.spring_weights.stiffness, drag: sign * ws.spring_weights.drag };
     contact_springs::add_diagonal(springs, weights, pattern, &mut ws.system);
-    ws.prepared = false;
+    if ws.prepared == Prepared::Ready {
+        ws.prepared = Prepared::SpringsChanged;
+    }
     let (force, stiffness) = (&mut ws.residual, &mut ws.direction);
     force.fill(Vec3::ZERO);
     stiffness.fill(Vec3::ZERO);
@@ -565,6 +567,20 @@ fn add_springs(
     }
 }
 
+/// How the preconditioner stands to the step's system ([`ImplicitWorkspace::prepared`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+enum Prepared {
+    /// Prepared for another system, or never.
+    #[default]
+    Stale,
+    /// Prepared for the system before its contact springs changed, which changed only its
+    /// diagonal blocks at the springs' vertices: the multigrid's finest level then takes
+    /// the change instead of being formed again ([`Multigrid::prepare`]).
+    SpringsChanged,
+    /// Prepared for the system as it is.
+    Ready,
+}
+
 /// `A = (1 + hα) M − h D − (hβ + h²θ²) K` from the derivatives in `ws`, in the storage of
 /// ∂f/∂x, with the diagonal blocks of the contact springs' stiffness (the rest is added in
 /// each product: [`multiply_system`]).
@@ -576,7 +592,7 @@ fn build_system(settings: &ImplicitSettings, h: f32, dynamics: &impl LinearDynam
     ws.dfdv.combine_into(-h, k_weight, pattern, &mut ws.system, |i| (1.0 + h * alpha) * dynamics.mass(i));
     ws.spring_weights = Weights { stiffness: k_weight, drag: h };
     contact_springs::add_diagonal(springs_of(settings, dynamics), ws.spring_weights, pattern, &mut ws.system);
-    ws.prepared = false;
+    ws.prepared = Prepared::Stale;
 }
 
 /// The contact springs' part of `∂f/∂x` and of `∂f/∂v`, as [`Weights`].
@@ -888,10 +904,11 @@ fn conjugate_gradient(
     let weights = *spring_weights;
     let system = StepSystem::with_couplings(pattern, system, couplings, -weights.stiffness);
     let (possible, springs) = (springs.map(|springs| (springs, weights)), springs.unwrap_or_default());
-    if !*prepared {
+    if *prepared != Prepared::Ready {
         let preparing = Instant::now();
+        let springs_changed = *prepared == Prepared::SpringsChanged;
         match hierarchy {
-            Some(hierarchy) => multigrid.prepare(hierarchy, system, filter, x, possible),
+            Some(hierarchy) => multigrid.prepare(hierarchy, system, filter, x, possible, springs_changed),
             None => (0..filter.len())
                 .into_par_iter()
                 .with_min_len(PARALLEL_MIN_LEN)
@@ -901,7 +918,7 @@ fn conjugate_gradient(
                 })
                 .collect_into_vec(preconditioner),
         }
-        *prepared = true;
+        *prepared = Prepared::Ready;
         stages.preconditioner += preparing.elapsed();
     }
     let (filter, rhs) = (&*filter, &*rhs);
