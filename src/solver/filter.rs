@@ -20,8 +20,6 @@ pub struct Filters {
     index: Vec<u32>,
     /// The blocks of the particles that are not free.
     blocks: Vec<Mat3>,
-    /// Whether a particle was restricted since the reset: the cloth touches something.
-    constrained: bool,
 }
 
 impl Filters {
@@ -37,7 +35,6 @@ impl Filters {
     pub fn reset(&mut self, n: usize, free: impl Fn(usize) -> bool) {
         self.index.clear();
         self.blocks.clear();
-        self.constrained = false;
         for i in 0..n {
             let index = if free(i) {
                 FREE
@@ -57,7 +54,6 @@ impl Filters {
 
     /// Restricts particle `i` further: its filter becomes `projection · S_i`.
     pub fn constrain(&mut self, i: usize, projection: Mat3) {
-        self.constrained = true;
         let filtered = projection * self.block(i);
         match self.index[i] {
             FREE => {
@@ -71,13 +67,6 @@ impl Filters {
     /// Pins particle `i`: its filter becomes zero.
     pub fn pin(&mut self, i: usize) {
         self.constrain(i, Mat3::ZERO);
-    }
-
-    /// Whether any particle was restricted ([`Filters::constrain`], [`Filters::pin`])
-    /// since the reset, beyond the pins it was reset with: in a step, whether the cloth
-    /// touches a body.
-    pub fn constrained(&self) -> bool {
-        self.constrained
     }
 
     /// Number of particles.
@@ -161,7 +150,6 @@ mod tests {
         assert!(filters.apply(2, v).dot(normal).abs() < 1e-6);
         assert!((filters.apply(2, v) - (v - v.dot(normal) * normal)).length() < 1e-6);
         assert!(filters.is_free(3) && !filters.is_free(2));
-        assert!(filters.constrained() && !Filters::free(4).constrained());
         assert_eq!(filters.block(0), Mat3::IDENTITY);
         assert_eq!(filters.block(1), Mat3::ZERO);
         for i in 0..4 {

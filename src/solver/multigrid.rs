@@ -119,14 +119,25 @@ const JACOBI_SWEEPS: usize = 6;
 /// before and after each coarse correction, for a system with no contact.
 const SMOOTHING_DEGREE: usize = 2;
 
-/// The smoother's degree for a system in contact: with the body (a particle restricted
-/// by a contact filter) or with itself (a contact spring acting). Draped and heaped cloth
-/// leaves slow modes to the smoother that the free sheet does not. Over five starts of
-/// each (thirteenth session), a third product each way took sphere_64_adaptive from
-/// 30 171 iterations to 24 169 and fold_64_adaptive from 44 763 to 34 621, and
-/// fold_64_adaptive's median frame from 54 to 29 ms; on a free sheet it is dearer than it
-/// saves (hang_64: 6.7 iterations a frame against 7.1, 5 to 10 % more time).
-const CONTACT_SMOOTHING_DEGREE: usize = 3;
+/// The smoother's degree for a heap: a system in which at least one particle in
+/// [`HEAP_SHARE`] is held by an acting contact spring, layers of cloth lying on layers.
+/// The layers' moving together is a slow mode that the free sheet does not have, and
+/// that the coarse levels hold only as well as their aggregates allow. Over five starts
+/// each (thirteenth session), a third product each way took fold_64_adaptive from 44 763
+/// iterations to 34 621 and its median frame from 48 to 31 ms. Where the cloth touches
+/// little (a drape at rest on sphere_64_adaptive's sphere: 14 to 22 acting springs of
+/// 4 096 particles, and the body's contact filters) the third product saves about what
+/// it costs (a resting frame's 21.4 iterations became 16.4 in the same state, for the
+/// same time) and the median frame took 2 % longer over five starts (mean 15.8 against
+/// 15.4 ms); on a free sheet it costs more than it saves (hang_64: 6.7 iterations a frame
+/// against 7.1, 5 to 10 % more time).
+const HEAP_SMOOTHING_DEGREE: usize = 3;
+
+/// One particle in this many held by an acting contact spring makes a system a heap
+/// ([`HEAP_SMOOTHING_DEGREE`]): fold_64_adaptive's heap holds 78 to 548 springs on its
+/// 4 096 particles (about 225 at rest), sphere_64_adaptive's drape 14 to 22 at rest (78
+/// at most, as it lands).
+const HEAP_SHARE: usize = 64;
 
 /// Fine rows of `A S P` formed at a time for the Galerkin product. Formed whole, `A S P`
 /// was the largest array of the levels (1.7 MB, 420 bytes a particle, on the 64² hang
@@ -415,7 +426,7 @@ struct Level {
     /// Per Chebyshev step, the weights `(keep, gain)` of its update
     /// `d = keep d + gain D⁻¹ (r − A z)`, `z += d`: a smoothing of degree `k` takes the
     /// first `k`.
-    chebyshev: [(f32, f32); CONTACT_SMOOTHING_DEGREE],
+    chebyshev: [(f32, f32); HEAP_SMOOTHING_DEGREE],
     /// Per aggregate of the coarsening below, the mean of its points.
     centres: Vec<Vec3>,
     /// Per aggregate, the axes its rotation node turns about, as columns: the principal
@@ -715,7 +726,7 @@ pub struct Multigrid {
     /// then keeps them (see [`Multigrid::prepare`]).
     prolongators_new: bool,
     /// The smoother's degree for the current system: [`SMOOTHING_DEGREE`], or
-    /// [`CONTACT_SMOOTHING_DEGREE`] in contact.
+    /// [`HEAP_SMOOTHING_DEGREE`] for a heap.
     degree: usize,
 }
 
@@ -1542,8 +1553,8 @@ impl Update<'_> {
 /// and δ the interval's centre and half-width and `ρₖ = 1 / (2 θ/δ − ρₖ₋₁)`, `ρ₀ = δ/θ`.
 /// Each step's weights are those of the best polynomial of its degree, whatever the
 /// degree the smoothing stops at. All zero (no smoothing) for a zero matrix.
-fn chebyshev_weights(upper: f32) -> [(f32, f32); CONTACT_SMOOTHING_DEGREE] {
-    let mut weights = [(0.0, 0.0); CONTACT_SMOOTHING_DEGREE];
+fn chebyshev_weights(upper: f32) -> [(f32, f32); HEAP_SMOOTHING_DEGREE] {
+    let mut weights = [(0.0, 0.0); HEAP_SMOOTHING_DEGREE];
     if upper <= 0.0 {
         return weights;
     }
@@ -1610,9 +1621,9 @@ impl Multigrid {
     ) {
         let had_springs = self.couplings.iter().any(|c| !c.is_empty());
         let couplings = acting(springs);
-        let contact = filter.constrained() || couplings.is_some();
-        self.degree = if contact { CONTACT_SMOOTHING_DEGREE } else { SMOOTHING_DEGREE };
         let n = system.pattern.rows();
+        let held = couplings.map_or(0, |(springs, _)| springs.iter().filter(|s| s.acts()).count());
+        self.degree = if held * HEAP_SHARE >= n { HEAP_SMOOTHING_DEGREE } else { SMOOTHING_DEGREE };
         let lumped = match (system.far, &hierarchy.fine) {
             (None, Some(fine)) => Some(fine),
             _ => None,
@@ -2432,7 +2443,7 @@ mod tests {
     /// by the V-cycle with the springs whole on its levels solve that in fewer iterations
     /// than with only the springs' diagonal blocks (in the finest
     /// level's matrix), to whose coarse levels moving the layers together is as stiff as
-    /// the springs. Measured, smoothing to degree 3 as in contact: 57 against 90 (to degree
+    /// the springs. Measured, smoothing to degree 3 as a heap: 57 against 90 (to degree
     /// 2, 72 against 87), and at degree 2 174 with the springs whole on the coarse levels
     /// alone, where the finest level's residual is not that of the system they
     /// hold. The rest of the work is the finest smoother's: a vertex moving with the
@@ -2499,10 +2510,10 @@ mod tests {
             }
             500
         };
-        // Both smoothed as in contact (the layers touch), and the springs whole as their
-        // smoothing would be without contact.
-        let whole = iterations(Some((&springs, weights)), CONTACT_SMOOTHING_DEGREE);
-        let diagonal = iterations(None, CONTACT_SMOOTHING_DEGREE);
+        // Both smoothed as a heap (the layers touch), and the springs whole as their
+        // smoothing would be on a free sheet.
+        let whole = iterations(Some((&springs, weights)), HEAP_SMOOTHING_DEGREE);
+        let diagonal = iterations(None, HEAP_SMOOTHING_DEGREE);
         let free = iterations(Some((&springs, weights)), SMOOTHING_DEGREE);
         assert!(
             10 * whole < 9 * diagonal,
@@ -2512,7 +2523,7 @@ mod tests {
         // 57 iterations against 72 (a fourth would take 49).
         assert!(
             10 * whole < 9 * free,
-            "{whole} iterations smoothed to degree {CONTACT_SMOOTHING_DEGREE}, {free} to {SMOOTHING_DEGREE}"
+            "{whole} iterations smoothed to degree {HEAP_SMOOTHING_DEGREE}, {free} to {SMOOTHING_DEGREE}"
         );
     }
 
