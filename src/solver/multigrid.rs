@@ -116,21 +116,22 @@ const MIN_SPREAD: f32 = 1e-3;
 const JACOBI_SWEEPS: usize = 6;
 
 /// Degree of the Chebyshev smoother (products with the level's matrix per smoothing)
-/// before and after each coarse correction, for a system with no contact.
+/// before and after each coarse correction, for a system that is not a heap
+/// ([`HEAP_SMOOTHING_DEGREE`]).
 const SMOOTHING_DEGREE: usize = 2;
 
 /// The smoother's degree for a heap: a system in which at least one particle in
 /// [`HEAP_SHARE`] is held by an acting contact spring, layers of cloth lying on layers.
 /// The layers' moving together is a slow mode that the free sheet does not have, and
 /// that the coarse levels hold only as well as their aggregates allow. Over five starts
-/// each (thirteenth session), a third product each way took fold_64_adaptive from 44 763
-/// iterations to 34 621 and its median frame from 48 to 31 ms. Where the cloth touches
-/// little (a drape at rest on sphere_64_adaptive's sphere: 14 to 22 acting springs of
-/// 4 096 particles, and the body's contact filters) the third product saves about what
-/// it costs (a resting frame's 21.4 iterations became 16.4 in the same state, for the
-/// same time) and the median frame took 2 % longer over five starts (mean 15.8 against
-/// 15.4 ms); on a free sheet it costs more than it saves (hang_64: 6.7 iterations a frame
-/// against 7.1, 5 to 10 % more time).
+/// (thirteenth session), a third product each way took fold_64_adaptive from 44 763
+/// iterations to 34 802, and its median frame from 49 to 26 ms. Each iteration costs
+/// about a quarter more, so it pays only where it saves more than that: degree 3
+/// wherever contact restricted a particle or a spring acted made sphere_64_adaptive's
+/// resting drape (14 to 22 acting springs on 4 096 particles) take 16.4 iterations a
+/// frame against 21.4 in the same state, for the same time, and its median frame 2 %
+/// longer over five starts (mean 15.8 against 15.4 ms); on a free sheet it costs more
+/// than it saves (hang_64: 6.7 iterations a frame against 7.1, 5 to 10 % more time).
 const HEAP_SMOOTHING_DEGREE: usize = 3;
 
 /// One particle in this many held by an acting contact spring makes a system a heap
