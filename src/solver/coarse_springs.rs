@@ -176,29 +176,27 @@ impl CoarseSprings {
         self.term_of.clear();
         reserve_floored(&mut self.term_of, self.nodes.capacity());
         self.term_of.resize(self.nodes.len(), 0);
-        self.own.clear();
-        self.own.resize(nodes, Mat3::ZERO);
-        self.partner.clear();
-        self.partner.resize(nodes, Mat3::ZERO);
         for t in 0..self.springs.len() {
-            let (entries, spring) = (self.entries(t), self.springs[t]);
-            for e in entries.clone() {
-                let node = self.nodes[e] as usize;
-                let slot = &mut self.next[node];
+            for e in self.entries(t) {
+                let slot = &mut self.next[self.nodes[e] as usize];
                 self.at[*slot as usize] = e as u32;
                 self.term_of[*slot as usize] = t as u32;
                 *slot += 1;
-                let pushed = spring * self.blocks[e];
-                for f in entries.clone() {
-                    let other = self.nodes[f] as usize;
-                    if other == node {
-                        self.own[node] += self.blocks[f].transpose() * pushed;
-                    } else if other == node ^ 1 {
-                        self.partner[other] += self.blocks[f].transpose() * pushed;
-                    }
-                }
             }
         }
+        let (mut own, mut partner) = (std::mem::take(&mut self.own), std::mem::take(&mut self.partner));
+        own.clear();
+        own.resize(nodes, Mat3::ZERO);
+        partner.clear();
+        partner.resize(nodes, Mat3::ZERO);
+        self.for_blocks(|row, column, block| {
+            if row == column {
+                own[row] += block;
+            } else if column == row ^ 1 {
+                partner[row] += block;
+            }
+        });
+        (self.own, self.partner) = (own, partner);
     }
 
     /// Node `c`'s diagonal block.
