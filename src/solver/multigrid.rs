@@ -57,7 +57,7 @@ use rayon::prelude::*;
 
 use super::coarse_springs::CoarseSprings;
 use super::contact_springs::{Blocks, ContactSpring, Weights, add_product, for_diagonal};
-use super::elements::block::{block_product, by_parts, times};
+use super::elements::block::{SymmetricBlock, block_product, by_parts, times};
 use super::elements::half::row_product;
 use super::elements::spring::{outer, skew};
 use super::elements::{BlockPattern, HalfBlock, StoredBlock, SymmetricBlockMatrix, WeightedCouplings};
@@ -531,8 +531,9 @@ impl Prolongation {
 /// the stiffness couples, are smoothed together.
 #[derive(Debug, Clone, Default)]
 struct Jacobi {
-    /// Per node, the block of `D⁻¹` that takes its own residual.
-    own: Vec<Mat3>,
+    /// Per node, the block of `D⁻¹` that takes its own residual: a diagonal block of the
+    /// inverse of a symmetric matrix, so symmetric, and kept by its six entries.
+    own: Vec<SymmetricBlock>,
     /// Per node of a paired level, the block that takes its partner's (node `i ^ 1`);
     /// empty on the finest level.
     partner: Vec<Mat3>,
@@ -549,13 +550,13 @@ impl Jacobi {
                 .with_min_len(PARALLEL_MIN_LEN)
                 .map(|i| {
                     let inverse = a.inverse_diagonal(i);
-                    a.constraint(i).map_or(inverse, |filter| inverse * filter)
+                    SymmetricBlock::new(a.constraint(i).map_or(inverse, |filter| inverse * filter))
                 })
                 .collect_into_vec(&mut self.own);
             return;
         }
         // Per node, its row of its pair's inverse.
-        self.own.resize(n, Mat3::ZERO);
+        self.own.resize(n, SymmetricBlock::default());
         self.partner.resize(n, Mat3::ZERO);
         self.own
             .par_chunks_mut(2)
@@ -564,7 +565,7 @@ impl Jacobi {
             .with_min_len(PARALLEL_MIN_LEN)
             .for_each(|(p, (own, partner))| {
                 let [[tt, tr], [rt, rr]] = pair_inverse(a, p);
-                own.copy_from_slice(&[tt, rr]);
+                own.copy_from_slice(&[SymmetricBlock::new(tt), SymmetricBlock::new(rr)]);
                 partner.copy_from_slice(&[tr, rt]);
             });
     }
@@ -572,7 +573,7 @@ impl Jacobi {
     /// `(D⁻¹ v)_i`, `v` given entry by entry.
     #[inline]
     fn apply(&self, i: usize, v: impl Fn(usize) -> Vec3) -> Vec3 {
-        let own = times(&self.own[i], Vec3A::from(v(i)));
+        let own = self.own[i].times(Vec3A::from(v(i)));
         Vec3::from(self.partner.get(i).map_or(own, |partner| own + times(partner, Vec3A::from(v(i ^ 1)))))
     }
 }
@@ -1352,7 +1353,7 @@ impl Level {
                 let pushed = [blocks[s], blocks.get(columns.len() + s).copied().unwrap_or(Mat3::ZERO)];
                 for r in 0..size {
                     let i = first + r;
-                    let mut smoothed = block_product(&inverse.own[i], &pushed[r]);
+                    let mut smoothed = block_product(&inverse.own[i].matrix(), &pushed[r]);
                     if let Some(partner) = inverse.partner.get(i) {
                         smoothed += block_product(partner, &pushed[1 - r]);
                     }

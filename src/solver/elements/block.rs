@@ -35,6 +35,42 @@ pub fn block_product(a: &Mat3, b: &Mat3) -> Mat3 {
     Mat3::from(Mat3A::from(*a) * Mat3A::from(*b))
 }
 
+/// A symmetric 3×3 block kept by its six distinct entries (`xx, yy, zz, xy, xz, yz`):
+/// 24 bytes where a [`Mat3`] takes 36. The multigrid's smoothers keep the inverse of
+/// each node's diagonal block, symmetric as the matrix is, for every node of every level:
+/// on the 256² hang scene 0.8 MB, 12 bytes a particle, less.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SymmetricBlock([f32; 6]);
+
+impl SymmetricBlock {
+    /// The symmetric part of `m`, `(m + mᵀ) / 2`: `m` itself, bit for bit, where it is
+    /// symmetric.
+    pub fn new(m: Mat3) -> Self {
+        let mean = |a: f32, b: f32| 0.5 * (a + b);
+        Self([
+            m.x_axis.x,
+            m.y_axis.y,
+            m.z_axis.z,
+            mean(m.y_axis.x, m.x_axis.y),
+            mean(m.z_axis.x, m.x_axis.z),
+            mean(m.z_axis.y, m.y_axis.z),
+        ])
+    }
+
+    /// The block whole.
+    pub fn matrix(self) -> Mat3 {
+        let [xx, yy, zz, xy, xz, yz] = self.0;
+        Mat3::from_cols(Vec3::new(xx, xy, xz), Vec3::new(xy, yy, yz), Vec3::new(xz, yz, zz))
+    }
+
+    /// `b v` as [`times`] forms it from the block whole: the same sums, the same bits.
+    #[inline]
+    pub fn times(&self, v: Vec3A) -> Vec3A {
+        let [xx, yy, zz, xy, xz, yz] = self.0;
+        Vec3A::new(xx, xy, xz) * v.x + Vec3A::new(xy, yy, yz) * v.y + Vec3A::new(xz, yz, zz) * v.z
+    }
+}
+
 /// Which blocks exist: for each particle (block row) the sorted particles (block columns)
 /// it shares an element with, itself included.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -804,6 +840,17 @@ mod tests {
                 block_product(&a, &b).to_cols_array().map(f32::to_bits),
                 (a * b).to_cols_array().map(f32::to_bits)
             );
+            // A symmetric block kept by its six entries is itself, and multiplies as
+            // itself whole; an unsymmetric one is kept as its symmetric part.
+            let symmetric = a + a.transpose();
+            let kept = SymmetricBlock::new(symmetric);
+            assert_eq!(kept.matrix().to_cols_array().map(f32::to_bits), symmetric.to_cols_array().map(f32::to_bits));
+            assert_eq!(
+                Vec3::from(kept.times(Vec3A::from(v))).to_array().map(f32::to_bits),
+                (symmetric * v).to_array().map(f32::to_bits)
+            );
+            let part = SymmetricBlock::new(a).matrix();
+            assert!(part.abs_diff_eq(0.5 * (a + a.transpose()), 1e-6 * a.abs().to_cols_array().iter().sum::<f32>()));
         }
     }
 
