@@ -922,20 +922,6 @@ fn conjugate_gradient(
         stages.preconditioner += preparing.elapsed();
     }
     let (filter, rhs) = (&*filter, &*rhs);
-    // z = M⁻¹ r, returning r·z.
-    let precondition = |multigrid: &mut Multigrid, r: &[Vec3], z: &mut [Vec3], partials: &mut Vec<f64>| {
-        if let Some(hierarchy) = hierarchy {
-            multigrid.apply(hierarchy, system, filter, r, z, possible);
-        }
-        let jacobi = hierarchy.is_none().then_some(&*preconditioner);
-        fused(z, r, partials, |i, z, r| {
-            if let Some(jacobi) = jacobi {
-                *z = filter.apply(i, Vec3::from(times(&jacobi[i], Vec3A::from(r))));
-            }
-            f64::from(r.dot(*z))
-        })
-    };
-
     // r = S (b − A δ), z = M⁻¹ r, d = z: from rest, r = S b, with no product of the
     // matrix with zero (0.76 ms a frame of hang_256's, whose steps start from rest).
     let mut rr = match known {
@@ -953,17 +939,32 @@ fn conjugate_gradient(
             })
         }
     };
-    let mut rz = precondition(multigrid, residual, product, partials);
-    direction.copy_from_slice(product);
     rhs.par_chunks(C)
         .enumerate()
         .map(|(c, b)| (0..b.len()).map(|k| f64::from(filter.apply(c * C + k, b[k]).length_squared())).sum())
         .collect_into_vec(partials);
     let target = f64::from(tolerance).powi(2) * total(partials);
-    for iteration in 0..settings.cg_max_iterations {
-        if rr <= target {
-            return iteration;
+    // A solve that starts within its tolerance (the last of a step's lagged solves, as
+    // often as not) takes no preconditioning: a V-cycle it would not use.
+    if rr <= target {
+        return 0;
+    }
+    // z = M⁻¹ r, returning r·z.
+    let precondition = |multigrid: &mut Multigrid, r: &[Vec3], z: &mut [Vec3], partials: &mut Vec<f64>| {
+        if let Some(hierarchy) = hierarchy {
+            multigrid.apply(hierarchy, system, filter, r, z, possible);
         }
+        let jacobi = hierarchy.is_none().then_some(&*preconditioner);
+        fused(z, r, partials, |i, z, r| {
+            if let Some(jacobi) = jacobi {
+                *z = filter.apply(i, Vec3::from(times(&jacobi[i], Vec3A::from(r))));
+            }
+            f64::from(r.dot(*z))
+        })
+    };
+    let mut rz = precondition(multigrid, residual, product, partials);
+    direction.copy_from_slice(product);
+    for iteration in 1..=settings.cg_max_iterations {
         // q = S A d, and d·q: the constant couplings' rows, if any, added in the pass that
         // filters.
         multiply_system(StepSystem { far: None, ..system }, springs, weights, direction, product);
@@ -973,7 +974,7 @@ fn conjugate_gradient(
             f64::from(d.dot(*q))
         });
         if curvature <= 0.0 {
-            return iteration;
+            return iteration - 1;
         }
         // δ += α d, r −= α q, with α = r·z / d·q; then z = M⁻¹ r.
         let step = (rz / curvature) as f32;
@@ -990,6 +991,12 @@ fn conjugate_gradient(
             })
             .collect_into_vec(partials);
         rr = total(partials);
+        // The solve ends with the update that brings it within its tolerance: the
+        // preconditioning and the direction that would follow serve no update (a V-cycle
+        // a solve, an eighth of hang_64's).
+        if rr <= target || iteration == settings.cg_max_iterations {
+            return iteration;
+        }
         // z = M⁻¹ r, into the buffer of q, which is spent.
         let next = precondition(multigrid, residual, product, partials);
         let ratio = (next / rz) as f32;
