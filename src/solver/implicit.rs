@@ -944,8 +944,8 @@ fn conjugate_gradient(
         .map(|(c, b)| (0..b.len()).map(|k| f64::from(filter.apply(c * C + k, b[k]).length_squared())).sum())
         .collect_into_vec(partials);
     let target = f64::from(tolerance).powi(2) * total(partials);
-    // A solve that starts within its tolerance (the last of a step's lagged solves, as
-    // often as not) takes no preconditioning: a V-cycle it would not use.
+    // A solve that starts within its tolerance (often one of a step's lagged solves)
+    // takes no preconditioning: a V-cycle it would not use.
     if rr <= target {
         return 0;
     }
