@@ -120,8 +120,8 @@ const JACOBI_SWEEPS: usize = 6;
 /// ([`HEAP_SMOOTHING_DEGREE`]).
 const SMOOTHING_DEGREE: usize = 2;
 
-/// The smoother's degree for a heap: a system in which at least one particle in
-/// [`HEAP_SHARE`] is held by an acting contact spring, layers of cloth lying on layers.
+/// The smoother's degree for a heap: a system with at least one acting contact spring
+/// for every [`HEAP_SHARE`] particles, layers of cloth lying on layers.
 /// The layers' moving together is a slow mode that the free sheet does not have, and
 /// that the coarse levels hold only as well as their aggregates allow. Over five starts
 /// (thirteenth session), a third product each way took fold_64_adaptive from 44 763
@@ -134,7 +134,7 @@ const SMOOTHING_DEGREE: usize = 2;
 /// than it saves (hang_64: 6.7 iterations a frame against 7.1, 5 to 10 % more time).
 const HEAP_SMOOTHING_DEGREE: usize = 3;
 
-/// One particle in this many held by an acting contact spring makes a system a heap
+/// One acting contact spring for every this many particles makes a system a heap
 /// ([`HEAP_SMOOTHING_DEGREE`]): fold_64_adaptive's heap holds 78 to 548 springs on its
 /// 4 096 particles (about 225 at rest), sphere_64_adaptive's drape 14 to 22 at rest (78
 /// at most, as it lands).
@@ -1624,8 +1624,8 @@ impl Multigrid {
         let had_springs = self.couplings.iter().any(|c| !c.is_empty());
         let couplings = acting(springs);
         let n = system.pattern.rows();
-        let held = couplings.map_or(0, |(springs, _)| springs.iter().filter(|s| s.acts()).count());
-        self.degree = if held * HEAP_SHARE >= n { HEAP_SMOOTHING_DEGREE } else { SMOOTHING_DEGREE };
+        let acting_springs = couplings.map_or(0, |(springs, _)| springs.iter().filter(|s| s.acts()).count());
+        self.degree = if acting_springs * HEAP_SHARE >= n { HEAP_SMOOTHING_DEGREE } else { SMOOTHING_DEGREE };
         let lumped = match (system.far, &hierarchy.fine) {
             (None, Some(fine)) => Some(fine),
             _ => None,
