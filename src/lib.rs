@@ -19,6 +19,7 @@ pub mod components;
 pub mod fabrics;
 pub mod io;
 pub mod memory;
+pub mod pool;
 pub mod resources;
 pub mod scene;
 pub mod schedule;

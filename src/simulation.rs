@@ -6,6 +6,7 @@ use std::time::{Duration, Instant};
 use bevy_ecs::prelude::*;
 
 use crate::components::{Cloth, Particles, RenderMesh, Triangles};
+use crate::pool::run_awake;
 use crate::resources::{HealthReport, IntegratorStats, Probes, SimClock};
 use crate::scene::load::SceneFile;
 use crate::scene::{Scene, SceneCounts, SceneError, spawn_scene};
@@ -80,10 +81,11 @@ impl Simulation {
     pub fn step_frame(&mut self) -> Result<(), Divergence> {
         // The frame runs on a worker of rayon's pool: a parallel loop started from any
         // other thread has to wake a worker and sleep until it is done, which cost more
-        // than the loops themselves (block descent starts a few hundred per step).
+        // than the loops themselves (block descent starts a few hundred per step). The
+        // other workers stay awake through it ([`run_awake`]).
         let world = &mut self.world;
         let start = Instant::now();
-        let probes = rayon::scope(|_| {
+        let probes = run_awake(|| {
             world.run_schedule(FrameSchedule);
             let measuring = Instant::now();
             world.run_schedule(ProbeSchedule);
