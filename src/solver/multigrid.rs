@@ -140,6 +140,10 @@ const HEAP_SMOOTHING_DEGREE: usize = 3;
 /// at most, as it lands).
 const HEAP_SHARE: usize = 64;
 
+/// Below this many pairs the paired smoothers' inverses are formed on one thread: a pair
+/// costs as much as some sixteen rows of a vector loop ([`PARALLEL_MIN_LEN`]).
+const PAIRS_MIN_LEN: usize = PARALLEL_MIN_LEN / 16;
+
 /// Fine rows of `A S P` formed at a time for the Galerkin product. Formed whole, `A S P`
 /// was the largest array of the levels (1.7 MB, 420 bytes a particle, on the 64² hang
 /// scene); two chunks of 512 rows are some 0.4 MB.
@@ -555,14 +559,17 @@ impl Jacobi {
                 .collect_into_vec(&mut self.own);
             return;
         }
-        // Per node, its row of its pair's inverse.
+        // Per node, its row of its pair's inverse. A pair's 6 × 6 factor and six solves
+        // take some 400 ns, so its loop splits at fewer items than a row's: at
+        // PARALLEL_MIN_LEN pairs, hang_64's coarse levels of 169 and 25 pairs ran on one
+        // thread, 73 µs a frame against 40.
         self.own.resize(n, SymmetricBlock::default());
         self.partner.resize(n, Mat3::ZERO);
         self.own
             .par_chunks_mut(2)
             .zip(self.partner.par_chunks_mut(2))
             .enumerate()
-            .with_min_len(PARALLEL_MIN_LEN)
+            .with_min_len(PAIRS_MIN_LEN)
             .for_each(|(p, (own, partner))| {
                 let [[tt, tr], [rt, rr]] = pair_inverse(a, p);
                 own.copy_from_slice(&[SymmetricBlock::new(tt), SymmetricBlock::new(rr)]);
