@@ -432,10 +432,7 @@ impl<'a> ForceModel<'a> {
         for (&j, &s) in row.above.iter().zip(&scales[row.storage]) {
             sum += s * (x[j as usize] - x[i]);
         }
-        for (j, s) in quadratic.couplings.row(i) {
-            sum += s * (x[j as usize] - x[i]);
-        }
-        sum
+        quadratic.couplings.fold(i, sum, |sum, j, s| sum + s * (x[j as usize] - x[i]))
     }
 
     /// Adds the wind's force on particle `i` to its `total`, triangle by triangle.

@@ -56,6 +56,29 @@ impl RowColumns {
         near.iter().map(move |&d| (row as i64 + i64::from(d)) as u32).chain(wide.iter().copied())
     }
 
+    /// `f(…f(f(init, c₀, w₀), c₁, w₁)…)` over the columns `c` of row `row` (at `range`
+    /// of the lists) and the `with` kept beside them in the same order: the same sum as
+    /// over [`RowColumns::row`] zipped with them, in a loop over two plain slices. Through
+    /// the chained iterator, hang_64's products with the quadratic bending's couplings
+    /// (the conjugate gradients' curvature pass) took 217 to 234 µs a frame; so, 167 to
+    /// 175 (same bits).
+    #[inline]
+    pub fn fold<W: Copy, T>(
+        &self,
+        row: usize,
+        range: Range<usize>,
+        with: &[W],
+        init: T,
+        f: impl Fn(T, u32, W) -> T,
+    ) -> T {
+        if self.wide.is_empty() {
+            let near = &self.near[range];
+            near.iter().zip(with).fold(init, |sum, (&d, &w)| f(sum, (row as i64 + i64::from(d)) as u32, w))
+        } else {
+            self.wide[range].iter().zip(with).fold(init, |sum, (&c, &w)| f(sum, c, w))
+        }
+    }
+
     /// Whether the columns are kept as offsets.
     #[cfg(test)]
     pub fn as_offsets(&self) -> bool {

@@ -77,6 +77,15 @@ impl ConstantCouplings {
         self.columns.row(i, range.clone()).zip(self.scales[range].iter().copied())
     }
 
+    /// `f(…f(init, j, s)…)` over particle `i`'s couplings `(j, s)`, columns ascending:
+    /// [`ConstantCouplings::row`]'s sum in a loop over plain slices
+    /// ([`RowColumns::fold`]), for the products.
+    #[inline]
+    pub fn fold<T>(&self, i: usize, init: T, f: impl Fn(T, u32, f32) -> T) -> T {
+        let range = self.offsets[i] as usize..self.offsets[i + 1] as usize;
+        self.columns.fold(i, range.clone(), &self.scales[range], init, f)
+    }
+
     /// Whether these are couplings of `rows` particles.
     pub fn has_rows(&self, rows: usize) -> bool {
         self.lumps.len() == rows
@@ -100,7 +109,7 @@ impl WeightedCouplings<'_> {
     /// Row `i` of these blocks times `x`: `weight Σ_j s_ij x_j`.
     #[inline]
     pub fn row_product(&self, i: usize, x: &[Vec3]) -> Vec3 {
-        let sum = self.couplings.row(i).fold(Vec3A::ZERO, |sum, (j, s)| sum + s * Vec3A::from(x[j as usize]));
+        let sum = self.couplings.fold(i, Vec3A::ZERO, |sum, j, s| sum + s * Vec3A::from(x[j as usize]));
         self.weight * Vec3::from(sum)
     }
 
