@@ -62,7 +62,7 @@ impl RowColumns {
     /// the chained iterator, hang_64's products with the quadratic bending's couplings
     /// (the conjugate gradients' curvature pass) took 217 to 234 µs a frame; so, 167 to
     /// 175 (same bits).
-    #[inline]
+    #[inline(always)]
     pub fn fold<W: Copy, T>(
         &self,
         row: usize,
