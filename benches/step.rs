@@ -12,6 +12,7 @@ use selvedge::builders::ClothData;
 use selvedge::builders::grid::build_grid;
 use selvedge::collision::intersection::IntersectionCounter;
 use selvedge::components::{BendingDesc, BendingLawDesc, ClothMaterial, ClothTopology, MembraneDesc, SolverParts};
+use selvedge::pool::run_awake;
 use selvedge::scene::parse_scene;
 use selvedge::solver::descent::{DescentSettings, DescentWorkspace, descend};
 use selvedge::solver::elements::{SymmetricBlockMatrix, VelocityJacobian};
@@ -211,13 +212,14 @@ fn kernels(c: &mut Criterion) {
     group.finish();
 }
 
-/// Times `work` on a worker of rayon's pool, as the engine's frames run
-/// ([`Simulation::step_frame`]): a parallel loop started from any other thread pays for
-/// waking a worker and sleeping until it is done, which the engine does not (timed that
-/// way, the derivative assembly of a 128² sheet took 32 ms on two threads, not 22).
+/// Times `work` on a worker of rayon's pool with the other workers kept awake, as the
+/// engine's frames run ([`Simulation::step_frame`], [`run_awake`]): a parallel loop
+/// started from any other thread pays for waking a worker and sleeping until it is done,
+/// which the engine does not (timed that way, the derivative assembly of a 128² sheet
+/// took 32 ms on two threads, not 22).
 fn on_pool<R>(b: &mut Bencher, mut work: impl FnMut() -> R + Send) {
     b.iter_custom(|iterations| {
-        rayon::scope(|_| {
+        run_awake(|| {
             let start = Instant::now();
             for _ in 0..iterations {
                 black_box(work());
