@@ -966,9 +966,12 @@ mod tests {
                     let numeric_x = (fxp[a] - fxm[a]) / (2.0 * h);
                     let numeric_v = (fvp[a] - fvm[a]) / (1000.0 * h);
                     let (a, b) = (a as u32, b as u32);
-                    let across =
-                        scratch.quadratic.couplings(&model).and_then(|c| c.row(a as usize).find(|&(j, _)| j == b));
-                    let across = Mat3::from_diagonal(Vec3::splat(across.map_or(0.0, |(_, s)| s)));
+                    // The coupling across an edge, if any (a row holds a column once).
+                    let across = scratch
+                        .quadratic
+                        .couplings(&model)
+                        .map_or(0.0, |c| c.fold(a as usize, 0.0, |found, j, s| if j == b { s } else { found }));
+                    let across = Mat3::from_diagonal(Vec3::splat(across));
                     let analytic_x = (dfdx.block(&topology.pattern, a, b) + across).col(axis);
                     let analytic_v = dfdv.block(&topology.pattern, a, b).col(axis);
                     let scale = numeric_x.length().max(analytic_x.length()).max(1.0);

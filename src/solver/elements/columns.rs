@@ -69,7 +69,7 @@ impl RowColumns {
         range: Range<usize>,
         with: &[W],
         init: T,
-        f: impl Fn(T, u32, W) -> T,
+        mut f: impl FnMut(T, u32, W) -> T,
     ) -> T {
         if self.wide.is_empty() {
             let near = &self.near[range];

@@ -66,22 +66,16 @@ impl ConstantCouplings {
         couplings.lumps = (0..rows)
             .into_par_iter()
             .with_min_len(PARALLEL_MIN_LEN)
-            .map(|i| couplings.row(i).fold(0.0, |moved, (_, s)| moved + scalar_lump(s)))
+            .map(|i| couplings.fold(i, 0.0, |moved, _, s| moved + scalar_lump(s)))
             .collect();
         couplings
     }
 
-    /// Particle `i`'s couplings, `(j, s)`, columns ascending.
-    pub fn row(&self, i: usize) -> impl Iterator<Item = (u32, f32)> + '_ {
-        let range = self.offsets[i] as usize..self.offsets[i + 1] as usize;
-        self.columns.row(i, range.clone()).zip(self.scales[range].iter().copied())
-    }
-
-    /// `f(…f(init, j, s)…)` over particle `i`'s couplings `(j, s)`, columns ascending:
-    /// [`ConstantCouplings::row`]'s sum in a loop over plain slices
-    /// ([`RowColumns::fold`]), for the products.
+    /// `f(…f(init, j, s)…)` over particle `i`'s couplings `(j, s)`, columns ascending, in
+    /// a loop over plain slices ([`RowColumns::fold`]): the one walk of a row, for the
+    /// products and every other visit.
     #[inline(always)]
-    pub fn fold<T>(&self, i: usize, init: T, f: impl Fn(T, u32, f32) -> T) -> T {
+    pub fn fold<T>(&self, i: usize, init: T, f: impl FnMut(T, u32, f32) -> T) -> T {
         let range = self.offsets[i] as usize..self.offsets[i + 1] as usize;
         self.columns.fold(i, range.clone(), &self.scales[range], init, f)
     }
@@ -118,9 +112,7 @@ impl WeightedCouplings<'_> {
 
     /// Calls `visit(j, block)` for each of row `i`'s blocks, columns ascending.
     pub fn for_row(&self, i: usize, mut visit: impl FnMut(u32, Mat3)) {
-        for (j, s) in self.couplings.row(i) {
-            visit(j, Mat3::from_diagonal(Vec3::splat(self.weight * s)));
-        }
+        self.couplings.fold(i, (), |(), j, s| visit(j, Mat3::from_diagonal(Vec3::splat(self.weight * s))));
     }
 
     /// What the multigrid's lumping moves onto row `i`'s diagonal from these blocks, as a
@@ -138,7 +130,14 @@ mod tests {
     /// The couplings of `rows` particles from `pairs`, and every row as it reads back.
     fn rows_of(rows: usize, pairs: &[(u32, u32, f32)]) -> (ConstantCouplings, Vec<Vec<(u32, f32)>>) {
         let couplings = ConstantCouplings::new(rows, || pairs.iter().copied());
-        let read = (0..rows).map(|i| couplings.row(i).collect()).collect();
+        let read = (0..rows)
+            .map(|i| {
+                couplings.fold(i, Vec::new(), |mut row, j, s| {
+                    row.push((j, s));
+                    row
+                })
+            })
+            .collect();
         (couplings, read)
     }
 
