@@ -194,6 +194,7 @@ fn kernels(c: &mut Criterion) {
                 free_inv_mass: &topology.free_inv_mass,
                 scratch: &mut scratch,
                 self_collision: false,
+                others: None,
                 contact_springs: &mut [],
                 bodies: &[],
                 start_force: None,

@@ -6,6 +6,7 @@ use glam::Vec3;
 use super::forces::{ForceElements, ForceEnvironment};
 use crate::collision::body_contact::ContactBody;
 use crate::collision::coupling::PropCoupling;
+use crate::collision::motion_bounds::{ClothSurfaces, Surface};
 use crate::components::{Cloth, Collider, Particles, Prop, SelfCollision, SelfTouching, SolverWorkspace, Touching};
 use crate::resources::{HealthProblem, HealthReport, IntegratorStats, SolverSettings, StepSettings};
 use crate::schedule::{SimSchedules, SubstepSystems};
@@ -36,10 +37,31 @@ pub fn integrate_cloths(
     mut colliders: Query<(&Collider, Option<&mut Prop>)>,
     mut props: Local<PropCoupling>,
     mut bodies: Local<Vec<ContactBody>>,
+    mut surfaces: Local<ClothSurfaces>,
 ) {
+    // Block descent bounds each cloth's sweeps by the other cloths it collides with too,
+    // where they stand when its turn comes: those before it where their steps ended.
+    let colliding = cloths.iter().filter(|(.., self_collision, _)| *self_collision).count();
+    let bounded = solver.integrator.bounds_contact(&solver.method) && colliding > 1;
+    if bounded {
+        surfaces.clear();
+        for (_, particles, (_, _, triangles, _, _, topology, _), .., self_collision, _) in &cloths {
+            if self_collision {
+                let triangles = &triangles.indices;
+                surfaces.add(Surface { triangles, edges: topology.edges(triangles) }, &particles.position);
+            }
+        }
+    }
+    let mut members = 0;
     for (index, (cloth, mut particles, elements, touching, mut workspace, self_collision, self_touching)) in
         cloths.iter_mut().enumerate()
     {
+        // The cloth's number among those bounded by one another: the query yields the
+        // cloths in the same order both times.
+        let member = (bounded && self_collision).then(|| {
+            members += 1;
+            members - 1
+        });
         let SolverWorkspace { integrator, forces, support, constraints, whole_start_force, .. } = &mut *workspace;
         // Particles the last step left on a body stay on it while the forces press them
         // into it (closing what gap the last step left), held fast where static friction
@@ -84,6 +106,7 @@ pub fn integrate_cloths(
             free_inv_mass: &topology.free_inv_mass,
             scratch: forces,
             self_collision,
+            others: member.and_then(|m| surfaces.others(m)),
             contact_springs: self_touching.map_or(&mut [], |s| s.into_inner().0.as_mut_slice()),
             bodies: &bodies,
             start_force: whole_start_force.then_some(&particles.force),
@@ -126,6 +149,9 @@ pub fn integrate_cloths(
         }
         particles.position = x;
         particles.velocity = v;
+        if let Some(member) = member {
+            surfaces.moved(member, &particles.position);
+        }
         // Only the contact with bodies reads the support: with no collider none is kept
         // (12 bytes a particle).
         support.clear();

@@ -10,7 +10,13 @@
 //! [`GAMMA`] (< ½) times the distance of the nearest pair it belongs to. Pairs farther
 //! apart than the reach `r` are not looked for; no vertex moves more than `GAMMA r` either,
 //! so they stay apart too.
+//!
+//! The other cloths a cloth collides with stand still while its solve runs (the cloths
+//! step one after another, each against the others where they stand then), so a pair with
+//! one of them has only the cloth's side moving, and the same fraction of its distance
+//! keeps it apart with room to spare: [`Others`] adds those pairs.
 
+use std::ops::Range;
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use glam::{Vec3, Vec4};
@@ -91,6 +97,101 @@ pub struct Surface<'a> {
     pub edges: &'a [[u32; 2]],
 }
 
+/// The surfaces of the cloths that collide with one another, each where it stands
+/// between their steps, with trees over each cloth's triangles and edges: what bounds each
+/// cloth's iterations against the others ([`ClothSurfaces::others`]). Kept from step to
+/// step, so that a warm step allocates nothing.
+#[derive(Debug, Default)]
+pub struct ClothSurfaces {
+    /// The cloths' vertices, one cloth after another.
+    positions: Vec<Vec3>,
+    /// Their triangles and edges, numbered in `positions`.
+    triangles: Vec<[u32; 3]>,
+    edges: Vec<[u32; 2]>,
+    /// The first `count` are the cloths'; those after, kept for their trees' buffers.
+    parts: Vec<SurfacePart>,
+    count: usize,
+}
+
+/// One cloth of [`ClothSurfaces`]: where its vertices, triangles and edges begin and end
+/// there, and the trees over its triangles and edges, numbered from its first.
+#[derive(Debug, Default)]
+struct SurfacePart {
+    vertices: Range<usize>,
+    triangles: Range<usize>,
+    edges: Range<usize>,
+    triangle_tree: Bvh,
+    edge_tree: Bvh,
+}
+
+impl ClothSurfaces {
+    /// Empties the surfaces, for the cloths to be added again in their order.
+    pub fn clear(&mut self) {
+        self.positions.clear();
+        self.triangles.clear();
+        self.edges.clear();
+        self.count = 0;
+    }
+
+    /// Adds a cloth's `surface` at `positions` after the cloths added since the last
+    /// [`ClothSurfaces::clear`], fitting its trees, and returns its number among them.
+    pub fn add(&mut self, surface: Surface<'_>, positions: &[Vec3]) -> usize {
+        let offset = self.positions.len() as u32;
+        let (triangles, edges) = (self.triangles.len(), self.edges.len());
+        self.triangles.extend(surface.triangles.iter().map(|t| t.map(|k| k + offset)));
+        self.edges.extend(surface.edges.iter().map(|e| e.map(|k| k + offset)));
+        self.positions.extend_from_slice(positions);
+        if self.parts.len() == self.count {
+            self.parts.push(SurfacePart::default());
+        }
+        let part = &mut self.parts[self.count];
+        part.vertices = offset as usize..self.positions.len();
+        part.triangles = triangles..self.triangles.len();
+        part.edges = edges..self.edges.len();
+        self.count += 1;
+        self.refit(self.count - 1);
+        self.count - 1
+    }
+
+    /// Moves cloth `cloth` to `positions`, where its step ended, and refits its trees.
+    pub fn moved(&mut self, cloth: usize, positions: &[Vec3]) {
+        let vertices = self.parts[cloth].vertices.clone();
+        self.positions[vertices].copy_from_slice(positions);
+        self.refit(cloth);
+    }
+
+    /// Fits cloth `cloth`'s trees to where it stands.
+    fn refit(&mut self, cloth: usize) {
+        let Self { positions: x, triangles, edges, parts, .. } = self;
+        let part = &mut parts[cloth];
+        let (triangles, edges) = (&triangles[part.triangles.clone()], &edges[part.edges.clone()]);
+        part.triangle_tree.refit(triangles.len(), |t| Aabb::around(triangles[t].map(|k| x[k as usize])));
+        part.edge_tree.refit(edges.len(), |e| Aabb::around(edges[e].map(|k| x[k as usize])));
+    }
+
+    /// The cloths other than `cloth`, as its solve meets them; `None` where there are none.
+    pub fn others(&self, cloth: usize) -> Option<Others<'_>> {
+        (self.count > 1).then_some(Others { surfaces: self, own: cloth })
+    }
+}
+
+/// The other cloths a cloth collides with ([`ClothSurfaces::others`]), standing still
+/// while it is solved.
+#[derive(Debug, Clone, Copy)]
+pub struct Others<'a> {
+    surfaces: &'a ClothSurfaces,
+    /// The number of the cloth being solved.
+    own: usize,
+}
+
+impl<'a> Others<'a> {
+    /// Each other cloth's part.
+    fn parts(&self) -> impl Iterator<Item = &'a SurfacePart> + use<'a> {
+        let own = self.own;
+        self.surfaces.parts[..self.surfaces.count].iter().enumerate().filter(move |&(c, _)| c != own).map(|(_, p)| p)
+    }
+}
+
 /// The trees and buffers of [`MotionBounds::compute`], kept from call to call so that a
 /// warm call allocates nothing. A clone starts with empty buffers.
 #[derive(Debug, Default)]
@@ -117,7 +218,17 @@ impl MotionBounds {
     /// as the reach squared (in a heap of folds, as the layers within it), and on a
     /// smooth sheet the nearest primitives that do not touch a vertex are about 0.7 of an
     /// edge from it, so looking farther than an edge would loosen no bound.
-    pub fn compute(&mut self, surface: Surface<'_>, x: &[Vec3], wanted: f32, bounds: &mut [Bound]) {
+    ///
+    /// With `others`, the pairs with the other cloths' triangles and edges, which stand
+    /// still, bound the vertices too.
+    pub fn compute(
+        &mut self,
+        surface: Surface<'_>,
+        others: Option<Others<'_>>,
+        x: &[Vec3],
+        wanted: f32,
+        bounds: &mut [Bound],
+    ) {
         let Surface { triangles, edges } = surface;
         let edge = if edges.is_empty() {
             0.0
@@ -183,6 +294,62 @@ impl MotionBounds {
                 }
             });
         });
+        if let Some(others) = others {
+            let ClothSurfaces { positions: y, triangles: their_triangles, edges: their_edges, .. } = others.surfaces;
+            // Each vertex against the other cloths' triangles: only the vertex moves, so
+            // only those nearer than its nearest pair so far matter.
+            (0..x.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).for_each(|v| {
+                let p = x[v as usize];
+                let mut own = f32::from_bits(nearest[v as usize].load(Ordering::Relaxed));
+                let point = Aabb::around([p]);
+                for part in others.parts() {
+                    let (tree, their_triangles) = (&part.triangle_tree, &their_triangles[part.triangles.clone()]);
+                    tree.query(&point.inflated(own), |t| {
+                        if point.distance(&tree.aabb(t)) >= own {
+                            return;
+                        }
+                        let [a, b, c] = their_triangles[t as usize].map(|k| y[k as usize]);
+                        let w = closest_on_triangle(p, a, b, c);
+                        own = own.min(p.distance(w[0] * a + w[1] * b + w[2] * c));
+                    });
+                }
+                lower(v, own);
+            });
+            // The other cloths' vertices against the cloth's triangles.
+            for part in others.parts() {
+                y[part.vertices.clone()].par_iter().with_min_len(PARALLEL_MIN_LEN).for_each(|&p| {
+                    let point = Aabb::around([p]);
+                    triangle_tree.query(&point.inflated(reach), |t| {
+                        let triangle = triangles[t as usize];
+                        if point.distance(&triangle_tree.aabb(t)) >= farthest(&triangle) {
+                            return;
+                        }
+                        let [a, b, c] = triangle.map(|k| x[k as usize]);
+                        let w = closest_on_triangle(p, a, b, c);
+                        let d = p.distance(w[0] * a + w[1] * b + w[2] * c);
+                        triangle.iter().for_each(|&k| lower(k, d));
+                    });
+                });
+            }
+            // The cloth's edges against the other cloths' edges.
+            (0..edges.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).for_each(|e| {
+                let [a, b] = edges[e as usize];
+                let (pa, pb) = (x[a as usize], x[b as usize]);
+                let own = edge_tree.aabb(e);
+                for part in others.parts() {
+                    let (tree, their_edges) = (&part.edge_tree, &their_edges[part.edges.clone()]);
+                    tree.query(&own.inflated(farthest(&[a, b])), |f| {
+                        if own.distance(&tree.aabb(f)) >= farthest(&[a, b]) {
+                            return;
+                        }
+                        let [pc, pd] = their_edges[f as usize].map(|k| y[k as usize]);
+                        let (s, t) = closest_between_segments(pa, pb, pc, pd);
+                        let distance = (pa + s * (pb - pa)).distance(pc + t * (pd - pc));
+                        [a, b].into_iter().for_each(|k| lower(k, distance));
+                    });
+                }
+            });
+        }
         bounds
             .par_iter_mut()
             .zip(nearest.par_iter())
@@ -266,7 +433,7 @@ pub(crate) mod tests {
         let surface = Surface { triangles: &triangles, edges: &edges };
         let mut bounds = vec![Bound::FREE; x0.len()];
         let mut motion = MotionBounds::default();
-        motion.compute(surface, &x0, 1.0, &mut bounds);
+        motion.compute(surface, None, &x0, 1.0, &mut bounds);
         // Each bound is at most GAMMA times the layers' gap: the nearest pair of a vertex
         // is across the gap (4 ± 1.5 mm) or along its own sheet (7 mm).
         assert!(bounds.iter().all(|b| b.plane == Vec4::ZERO && b.radius > 0.0 && b.radius <= GAMMA * 0.0055 + 1e-6));
@@ -291,8 +458,54 @@ pub(crate) mod tests {
         assert!(any_crossing(&triangles, &edges, &x0, &through));
         // A second call over the same mesh gives the same bounds.
         let mut again = vec![Bound::FREE; x0.len()];
-        motion.compute(surface, &x0, 1.0, &mut again);
+        motion.compute(surface, None, &x0, 1.0, &mut again);
         assert_eq!(again, bounds);
+    }
+
+    #[test]
+    fn another_cloth_standing_still_bounds_a_cloth_as_its_own_layer_would() {
+        // The two layers as two cloths: the lower one stands still while the upper one
+        // is solved.
+        let mut rng = Lcg(11);
+        let (x, triangles) = two_layers(&mut rng);
+        let (lower, upper) = triangles.split_at(triangles.len() / 2);
+        let upper: Vec<[u32; 3]> = upper.iter().map(|t| t.map(|k| k - 36)).collect();
+        let (lower_edges, upper_edges) = (ContactMesh::edges_of(lower), ContactMesh::edges_of(&upper));
+        let (x_lower, x_upper) = x.split_at(36);
+        let mut surfaces = ClothSurfaces::default();
+        surfaces.clear();
+        surfaces.add(Surface { triangles: lower, edges: &lower_edges }, x_lower);
+        let own = surfaces.add(Surface { triangles: &upper, edges: &upper_edges }, x_upper);
+        assert!(surfaces.others(own).is_some());
+        let surface = Surface { triangles: &upper, edges: &upper_edges };
+        let mut motion = MotionBounds::default();
+        let (mut alone, mut bounds) = (vec![Bound::FREE; 36], vec![Bound::FREE; 36]);
+        motion.compute(surface, None, x_upper, 1.0, &mut alone);
+        motion.compute(surface, surfaces.others(own), x_upper, 1.0, &mut bounds);
+        // Alone, each vertex is bounded by its own sheet (7 mm to the nearest diagonal);
+        // with the other cloth, by the gap (4 ± 1.5 mm).
+        assert!(alone.iter().all(|b| b.radius > GAMMA * 0.0065), "{alone:?}");
+        assert!(bounds.iter().all(|b| b.radius > 0.0 && b.radius <= GAMMA * 0.0055 + 1e-6), "{bounds:?}");
+        // The upper cloth's vertices each move their whole bound, down or anywhere, the
+        // lower one standing: nothing crosses.
+        let edges = ContactMesh::edges_of(&triangles);
+        let moved = |bounds: &[Bound], direction: &mut dyn FnMut() -> Vec3| -> Vec<Vec3> {
+            let upper = x_upper.iter().zip(bounds).map(|(p, b)| *p + b.radius * direction());
+            x_lower.iter().copied().chain(upper).collect()
+        };
+        for trial in 0..20 {
+            let x1 = match trial % 2 {
+                0 => moved(&bounds, &mut || -Vec3::Y),
+                _ => moved(&bounds, &mut || rng.direction()),
+            };
+            assert!(!any_crossing(&triangles, &edges, &x, &x1), "trial {trial} crossed");
+        }
+        // The lower cloth moved away loosens the bounds.
+        let away: Vec<Vec3> = x_lower.iter().map(|p| *p - 0.01 * Vec3::Y).collect();
+        surfaces.moved(0, &away);
+        let mut looser = vec![Bound::FREE; 36];
+        motion.compute(surface, surfaces.others(own), x_upper, 1.0, &mut looser);
+        assert_eq!(looser, alone);
     }
 
     #[test]
@@ -311,7 +524,7 @@ pub(crate) mod tests {
         }
         let edges = ContactMesh::edges_of(&triangles);
         let mut bounds = vec![Bound::FREE; x.len()];
-        MotionBounds::default().compute(Surface { triangles: &triangles, edges: &edges }, &x, 1.0, &mut bounds);
+        MotionBounds::default().compute(Surface { triangles: &triangles, edges: &edges }, None, &x, 1.0, &mut bounds);
         let reach: f32 =
             edges.iter().map(|&[a, b]| x[a as usize].distance(x[b as usize])).sum::<f32>() / edges.len() as f32;
         assert!(reach > std::f32::consts::FRAC_1_SQRT_2);

@@ -193,9 +193,10 @@ pub struct DescentDesc {
     pub sweeps: u32,
     /// Chebyshev's estimate of a sweep's spectral radius, in [0, 1) (0: no acceleration).
     pub spectral_radius: f32,
-    /// Whether a self-colliding cloth's contact with itself bounds how far each sweep
-    /// moves each particle, so that no sweep passes a vertex through a triangle (default
-    /// true; false leaves crossings to the contact stage after the step).
+    /// Whether a self-colliding cloth's contact with itself and with the other
+    /// self-colliding cloths bounds how far each sweep moves each particle, so that no
+    /// sweep passes a vertex through a triangle (default true; false leaves crossings to
+    /// the contact stage after the step).
     pub contact_bounds: bool,
 }
 

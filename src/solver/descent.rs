@@ -113,8 +113,9 @@ pub struct DescentSettings {
     /// Estimated spectral radius ρ ∈ [0, 1) of a Gauss–Seidel sweep, which sets the
     /// Chebyshev weights; 0 turns the acceleration off. Too high a value overshoots.
     pub spectral_radius: f32,
-    /// Whether a self-colliding cloth's contact with itself, and every cloth's contact with
-    /// the solid bodies, bounds every sweep ([`BoundedMotion`]).
+    /// Whether a self-colliding cloth's contact with itself and with the other
+    /// self-colliding cloths, and every cloth's contact with the solid bodies, bounds every
+    /// sweep ([`BoundedMotion`]).
     pub contact_bounds: bool,
 }
 
@@ -646,7 +647,7 @@ mod tests {
         // sweeps of a longer run begin as a shorter run's did.
         let after = |sweeps: u32, bounded: bool| {
             let mut search = MotionBounds::default();
-            let mut bound = |x: &[Vec3], wanted: f32, out: &mut [Bound]| search.compute(surface, x, wanted, out);
+            let mut bound = |x: &[Vec3], wanted: f32, out: &mut [Bound]| search.compute(surface, None, x, wanted, out);
             swept(&x0, &edges, h, &solution, sweeps, bounded.then_some(&mut bound))
         };
         let path = |bounded: bool| -> Vec<Vec<Vec3>> {

@@ -16,7 +16,7 @@ use super::integrate::Dynamics;
 use super::multigrid::Hierarchy;
 use super::reduce;
 use crate::collision::body_contact::ContactBody;
-use crate::collision::motion_bounds::Surface;
+use crate::collision::motion_bounds::{Others, Surface};
 use crate::components::{BendingHinges, ClothElements, ClothTopology, Csr, MembraneTriangles, Springs};
 use crate::memory::release;
 
@@ -760,6 +760,8 @@ pub struct ClothDynamics<'a> {
     pub scratch: &'a mut ForceScratch,
     /// Whether the cloth collides with itself, which bounds block descent's iterations.
     pub self_collision: bool,
+    /// The other cloths it collides with, which bound block descent's iterations too.
+    pub others: Option<Others<'a>>,
     /// The cloth–cloth contacts the implicit step holds apart.
     pub contact_springs: &'a mut [ContactSpring],
     /// The solid bodies where the step ends, which bound block descent's iterations.
@@ -803,6 +805,10 @@ impl LinearDynamics for ClothDynamics<'_> {
     fn contact_surface(&self) -> Option<Surface<'_>> {
         let (triangles, topology) = (self.model.triangles, self.model.topology);
         self.self_collision.then(|| Surface { triangles, edges: topology.edges(triangles) })
+    }
+
+    fn contact_others(&self) -> Option<Others<'_>> {
+        self.others
     }
 
     fn contact_bodies(&self) -> &[ContactBody] {
@@ -1060,6 +1066,7 @@ mod tests {
                 free_inv_mass: &fixture.topology.free_inv_mass,
                 scratch: &mut scratch,
                 self_collision: false,
+                others: None,
                 contact_springs: &mut [],
                 bodies: &[],
                 start_force: given.then_some(&start),

@@ -35,7 +35,7 @@ use super::warm_start::WarmStart;
 use super::{PARALLEL_MIN_LEN, add_rows};
 use crate::collision::body_bounds;
 use crate::collision::body_contact::ContactBody;
-use crate::collision::motion_bounds::{Bound, MotionBounds, Surface};
+use crate::collision::motion_bounds::{Bound, MotionBounds, Others, Surface};
 
 /// Rayleigh damping `C = αM + βK_s` (K_s the stiffness, `−∂f/∂x`).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -111,6 +111,11 @@ pub trait LinearDynamics: Dynamics + Sync {
     /// The surface whose contact with itself bounds each iteration of block descent, if
     /// the system collides with itself.
     fn contact_surface(&self) -> Option<Surface<'_>> {
+        None
+    }
+    /// The other cloths the system's cloth collides with, standing still while it is
+    /// solved, which bound each iteration of block descent too.
+    fn contact_others(&self) -> Option<Others<'_>> {
         None
     }
     /// The solid bodies, where the step ends, that bound each iteration of block descent.
@@ -793,10 +798,11 @@ fn solve(
         }
         LinearSolver::BlockDescent(descent) => {
             let ImplicitWorkspace { x: base, anchor, motion_bounds, .. } = ws;
-            let (surface, bodies) = (dynamics.contact_surface(), dynamics.contact_bodies());
+            let (surface, others, bodies) =
+                (dynamics.contact_surface(), dynamics.contact_others(), dynamics.contact_bodies());
             let mut bound = bounded(settings, dynamics).then_some(move |x: &[Vec3], wanted: f32, out: &mut [Bound]| {
                 match surface {
-                    Some(surface) => motion_bounds.compute(surface, x, wanted, out),
+                    Some(surface) => motion_bounds.compute(surface, others, x, wanted, out),
                     None => out.fill(Bound::FREE),
                 }
                 body_bounds::limit(bodies, x, out);

@@ -64,6 +64,18 @@ impl Integrator {
             && !matches!(settings.implicit.linear_solver, LinearSolver::BlockDescent(_))
     }
 
+    /// Whether its step, with `settings`, is solved by block descent with its sweeps
+    /// bounded by contact ([`super::descent`]).
+    pub fn bounds_contact(self, settings: &MethodSettings) -> bool {
+        match self {
+            Integrator::BlockDescent => settings.descent.contact_bounds,
+            Integrator::ImplicitEuler | Integrator::Newmark => {
+                matches!(settings.implicit.linear_solver, LinearSolver::BlockDescent(d) if d.contact_bounds)
+            }
+            _ => false,
+        }
+    }
+
     /// Every integrator, for listings and tests.
     pub const ALL: [Integrator; 10] = [
         Integrator::ExplicitEuler,

@@ -94,6 +94,7 @@ impl ParticleSystem {
             free_inv_mass: &self.topology.free_inv_mass,
             scratch: &mut scratch,
             self_collision: false,
+            others: None,
             contact_springs: &mut [],
             bodies: &[],
             start_force: None,
