@@ -87,6 +87,20 @@ pub fn limit(bodies: &[ContactBody], x: &[Vec3], bounds: &mut [Bound]) {
     });
 }
 
+/// The convex body a vertex at `p` rests on, if any: one whose surface it lies within the
+/// contact thickness of, and the slack a bound's plane puts beyond it; its outward normal
+/// there, its velocity there and its friction.
+pub fn resting_on(bodies: &[ContactBody], p: Vec3) -> Option<(Vec3, Vec3, f32)> {
+    bodies.iter().filter(|body| body.shape.is_convex()).find_map(|body| {
+        let pose = &body.state.pose;
+        let projection = body.shape.project_point(pose, p, false);
+        let offset = p - projection.point;
+        let reach = body.thickness * (1.0 + CAUGHT);
+        let normal = offset.try_normalize().filter(|_| !projection.is_inside && offset.length() <= reach)?;
+        Some((normal, body.state.velocity_at(projection.point), body.friction))
+    })
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use parry3d::math::Pose3;

@@ -808,7 +808,8 @@ fn solve(
                 body_bounds::limit(bodies, x, out);
             });
             let motion = bound.as_mut().map(|bound| BoundedMotion { base, scale, anchor, bound });
-            descend(
+            let held = motion.is_some();
+            let sweeps = descend(
                 step_system(dynamics, &ws.system, -ws.spring_weights.stiffness),
                 dynamics.colouring(),
                 &ws.rhs,
@@ -818,11 +819,59 @@ fn solve(
                 motion,
                 &mut ws.delta,
                 &mut ws.descent,
-            )
+            );
+            if held {
+                push_friction(dynamics, settings, x, scale, ws);
+            }
+            sweeps
         }
     };
     ws.stages.solve += started.elapsed().saturating_sub(ws.stages.preconditioner - preconditioner);
     iterations
+}
+
+/// The friction of the bodies' pushes within block descent's sweeps. A body's plane stops
+/// a landing particle within the sweeps, so the contact stage after the step meets no
+/// impact, and the friction the impact would have carried never acts: on Zheng's slope a
+/// cloth with μ above tan 30° slid on after landing (0.58 m in a second at 10 steps a
+/// frame) where conjugate gradients, which leave the impact to the contact stage, stick.
+/// The push is in the solve's residual: where a particle free of constraints ends resting
+/// on a convex body ([`body_bounds::resting_on`]), `J = (A Δv − b)_i` along the body's
+/// normal is the impulse the body gave it, and Coulomb's friction takes up to `μ J_n / m`
+/// off its velocity along the surface, relative to the body (the step's end velocity, its
+/// move over `h`: θ is 1). Particles the contact constraints hold are left to them.
+fn push_friction(
+    dynamics: &impl LinearDynamics,
+    settings: &ImplicitSettings,
+    x: &[Vec3],
+    h: f32,
+    ws: &mut ImplicitWorkspace,
+) {
+    let bodies = dynamics.contact_bodies();
+    if bodies.is_empty() {
+        return;
+    }
+    let system = step_system(dynamics, &ws.system, -ws.spring_weights.stiffness);
+    multiply_system(system, springs_of(settings, dynamics), ws.spring_weights, &ws.delta, &mut ws.product);
+    let (end, rhs, filter) = (&ws.anchor, &ws.rhs, &ws.filter);
+    ws.product.par_iter_mut().enumerate().with_min_len(PARALLEL_MIN_LEN).for_each(|(i, change)| {
+        let push = *change - rhs[i];
+        *change = Vec3::ZERO;
+        if !filter.is_free(i) {
+            return;
+        }
+        let Some((normal, velocity, friction)) = body_bounds::resting_on(bodies, end[i]) else { return };
+        let pressed = push.dot(normal);
+        let relative = (end[i] - x[i]) / h - velocity;
+        let slide = relative - normal.dot(relative) * normal;
+        let speed = slide.length();
+        if pressed > 0.0 && speed > 0.0 {
+            *change = -(friction * pressed / (dynamics.mass(i) * speed)).min(1.0) * slide;
+        }
+    });
+    for (delta, change) in ws.delta.iter_mut().zip(&ws.product) {
+        *delta += *change;
+    }
 }
 
 /// What the conjugate gradients know of `A δ` where they start.
