@@ -61,18 +61,21 @@ impl Integrator {
     /// by conjugate gradients, not block descent, which bounds each vertex's motion instead.
     pub fn solves_contact_springs(self, settings: &MethodSettings) -> bool {
         matches!(self, Integrator::ImplicitEuler | Integrator::Newmark)
-            && !matches!(settings.implicit.linear_solver, LinearSolver::BlockDescent(_))
+            && !matches!(self.linear_solver(settings), LinearSolver::BlockDescent(_))
     }
 
     /// Whether its step, with `settings`, is solved by block descent with its sweeps
     /// bounded by contact ([`super::descent`]).
     pub fn bounds_contact(self, settings: &MethodSettings) -> bool {
+        self.is_implicit() && matches!(self.linear_solver(settings), LinearSolver::BlockDescent(d) if d.contact_bounds)
+    }
+
+    /// The linear solver of its step with `settings`, if it is implicit: block descent's
+    /// own, else the settings'.
+    fn linear_solver(self, settings: &MethodSettings) -> LinearSolver {
         match self {
-            Integrator::BlockDescent => settings.descent.contact_bounds,
-            Integrator::ImplicitEuler | Integrator::Newmark => {
-                matches!(settings.implicit.linear_solver, LinearSolver::BlockDescent(d) if d.contact_bounds)
-            }
-            _ => false,
+            Integrator::BlockDescent => LinearSolver::BlockDescent(settings.descent),
+            _ => settings.implicit.linear_solver,
         }
     }
 
@@ -325,11 +328,8 @@ pub fn step(
             Ok(implicit_step(&euler, dynamics, constraints, bodies, x, v, t, h, &mut ws.implicit))
         }
         Integrator::BlockDescent => {
-            let descent = ImplicitSettings {
-                theta: 1.0,
-                linear_solver: LinearSolver::BlockDescent(settings.descent),
-                ..settings.implicit
-            };
+            let descent =
+                ImplicitSettings { theta: 1.0, linear_solver: method.linear_solver(settings), ..settings.implicit };
             Ok(implicit_step(&descent, dynamics, constraints, bodies, x, v, t, h, &mut ws.implicit))
         }
         Integrator::Newmark => {
