@@ -48,23 +48,19 @@ pub fn limit(bodies: &[ContactBody], x: &[Vec3], bounds: &mut [Bound]) {
             if ball(outside_box) >= radius {
                 continue;
             }
-            let projection = body.shape.project_point(pose, p, false);
-            let offset = p - projection.point;
-            let distance = offset.length();
+            let near = body.surface_near(p);
             // A vertex exactly on the surface has no side to keep to.
-            let Some(normal) = offset.try_normalize().map(|n| if projection.is_inside { -n } else { n }) else {
+            let Some(normal) = near.outward else {
                 radius = 0.0;
                 continue;
             };
-            if !projection.is_inside && !body.shape.is_convex() {
-                radius = radius.min(ball(distance));
+            let inside = near.signed < 0.0;
+            if !inside && !body.shape.is_convex() {
+                radius = radius.min(ball(near.signed));
                 continue;
             }
-            let (clearance, instead) = if projection.is_inside {
-                (-distance - thickness, 0.0)
-            } else {
-                (distance - thickness, ball(distance))
-            };
+            let clearance = near.signed - thickness;
+            let instead = if inside { 0.0 } else { ball(near.signed) };
             // The plane lies the slack short of the thickness, so that a vertex put on its
             // slack rests at the thickness; through the vertex if that is nearer, so that
             // measuring again never lets it deeper.
@@ -92,12 +88,10 @@ pub fn limit(bodies: &[ContactBody], x: &[Vec3], bounds: &mut [Bound]) {
 /// there, its velocity there and its friction.
 pub fn resting_on(bodies: &[ContactBody], p: Vec3) -> Option<(Vec3, Vec3, f32)> {
     bodies.iter().filter(|body| body.shape.is_convex()).find_map(|body| {
-        let pose = &body.state.pose;
-        let projection = body.shape.project_point(pose, p, false);
-        let offset = p - projection.point;
-        let reach = body.thickness * (1.0 + CAUGHT);
-        let normal = offset.try_normalize().filter(|_| !projection.is_inside && offset.length() <= reach)?;
-        Some((normal, body.state.velocity_at(projection.point), body.friction))
+        let near = body.surface_near(p);
+        let resting = near.signed > 0.0 && near.signed <= body.thickness * (1.0 + CAUGHT);
+        let normal = near.outward.filter(|_| resting)?;
+        Some((normal, body.state.velocity_at(near.point), body.friction))
     })
 }
 
@@ -127,9 +121,7 @@ pub(crate) mod tests {
 
     /// The signed distance from `p` to the body's surface [m].
     fn signed(body: &ContactBody, p: Vec3) -> f32 {
-        let projection = body.shape.project_point(&body.state.pose, p, false);
-        let distance = p.distance(projection.point);
-        if projection.is_inside { -distance } else { distance }
+        body.surface_near(p).signed
     }
 
     /// A unit cube as a triangle mesh: convex, but a mesh, which the bounds do not take

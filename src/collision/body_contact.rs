@@ -41,6 +41,33 @@ pub struct ContactBody {
     pub prop: bool,
 }
 
+/// Where a point stands against a body's surface ([`ContactBody::surface_near`]).
+#[derive(Debug, Clone, Copy)]
+pub struct SurfacePoint {
+    /// The nearest point of the surface.
+    pub point: Vec3,
+    /// The point's signed distance from it, negative inside [m].
+    pub signed: f32,
+    /// The body's outward normal there; none for a point exactly on the surface, which has
+    /// no side.
+    pub outward: Option<Vec3>,
+}
+
+impl ContactBody {
+    /// Where `p` stands against the body's surface, as the body stands now.
+    pub fn surface_near(&self, p: Vec3) -> SurfacePoint {
+        let projection = self.shape.project_point(&self.state.pose, p, false);
+        let offset = p - projection.point;
+        let distance = offset.length();
+        let inside = projection.is_inside;
+        SurfacePoint {
+            point: projection.point,
+            signed: if inside { -distance } else { distance },
+            outward: offset.try_normalize().map(|n| if inside { -n } else { n }),
+        }
+    }
+}
+
 /// What the contacts of one step did to one cloth.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct ContactTotals {
@@ -320,10 +347,8 @@ fn locate(body: &ContactBody, h: f32, start: Vec3, x: &mut Vec3) -> Option<Proxi
         *x = point;
         return Some(Proximity { signed: 0.0, outward });
     }
-    let projection = body.shape.project_point(&body.state.pose, *x, false);
-    let offset = *x - projection.point;
-    let distance = offset.length();
-    let signed = if projection.is_inside { -distance } else { distance };
+    let near = body.surface_near(*x);
+    let signed = near.signed;
     let slack = match body.response {
         ContactResponse::Slide | ContactResponse::Stick => TOUCH_SLACK * body.thickness,
         ContactResponse::Regimes(_) => 0.0,
@@ -332,8 +357,7 @@ fn locate(body: &ContactBody, h: f32, start: Vec3, x: &mut Vec3) -> Option<Proxi
         return None;
     }
     // A particle exactly on the surface has no direction to leave by.
-    let outward = offset.try_normalize().map(|n| if projection.is_inside { -n } else { n })?;
-    Some(Proximity { signed, outward })
+    Some(Proximity { signed, outward: near.outward? })
 }
 
 /// Moves a particle closer to the body than the contact thickness out to it along the
