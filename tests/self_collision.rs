@@ -114,23 +114,28 @@ fn a_heap_in_contact_gives_the_same_bits_on_one_thread_and_two() {
 }
 
 /// Runs `fold_heap.ron` with block descent at one step per frame, its contact bounds on
-/// or off, for `frames` frames, checking that no triangle pair intersects after any;
-/// returns the frame-summed continuous impacts the contact stage met after the steps, and
-/// the positions.
-fn descent_heap(bounded: bool, frames: u32) -> (f64, Vec<glam::Vec3>) {
+/// or off, for `frames` frames ([`descended`]).
+fn descent_heap(bounded: bool, frames: u32) -> (f64, Vec<Vec<glam::Vec3>>) {
     let mut sim = common::bundled_with("fold_heap.ron", |scene| {
         scene.solver.integrator = Integrator::BlockDescent;
         scene.solver.substeps = Some(1);
         scene.solver.descent.get_or_insert_default().contact_bounds = bounded;
     });
+    descended(&mut sim, frames)
+}
+
+/// Steps `sim` `frames` frames, checking that no triangle pair intersects after any;
+/// returns the frame-summed continuous impacts the contact stage met after the steps, and
+/// each cloth's positions.
+fn descended(sim: &mut selvedge::Simulation, frames: u32) -> (f64, Vec<Vec<glam::Vec3>>) {
     let mut impacts = 0.0;
     for frame in 1..=frames {
         sim.step_frame().unwrap_or_else(|e| panic!("{e}"));
-        assert_eq!(common::probe(&sim, "self_intersections"), 0.0, "frame {frame}: the strip passed through itself");
-        impacts += common::probe(&sim, "self_impacts");
+        assert_eq!(common::probe(sim, "self_intersections"), 0.0, "frame {frame}: the cloth passed through itself");
+        impacts += common::probe(sim, "self_impacts");
     }
     let world = sim.world_mut();
-    let positions = world.query::<&Particles>().single(world).expect("one cloth").position.clone();
+    let positions = world.query::<&Particles>().iter(world).map(|p| p.position.clone()).collect();
     (impacts, positions)
 }
 
@@ -151,8 +156,8 @@ fn block_descent_bounded_by_contact_leaves_the_contact_stage_almost_nothing_to_c
 
 /// Two strips of `fold_heap.ron`, two cloths, the second 6 cm behind the first and 10 cm
 /// higher, leaning the same way, so that each folds onto itself and onto the other, at one
-/// block-descent step a frame.
-fn two_strips() -> String {
+/// block-descent step a frame, its contact bounds on or off.
+fn two_strips(bounded: bool) -> String {
     let strip = |name: &str, translation: &str| {
         format!(
             "(name: \"{name}\", shape: Grid(size: (0.3, 1.5), resolution: (16, 76)), \
@@ -163,29 +168,18 @@ fn two_strips() -> String {
     };
     format!(
         "Scene(name: \"two_strips\", gravity: (0.0, -9.8, 0.0), air: (drag: 0.2), \
-         solver: (integrator: BlockDescent, substeps: 1), time: (fps: 60, duration_s: 1.5), \
-         cloths: [{}, {}], ground: (enabled: true, height: 0.0, friction: 0.3))",
+         solver: (integrator: BlockDescent, substeps: 1, descent: (contact_bounds: {bounded})), \
+         time: (fps: 60, duration_s: 1.5), cloths: [{}, {}], ground: (enabled: true, height: 0.0, friction: 0.3))",
         strip("first", "(0.0, 0.85, 0.0)"),
         strip("second", "(0.0, 0.95, 0.06)"),
     )
 }
 
-/// Runs [`two_strips`] with its contact bounds on or off to its end, checking that no
-/// triangle pair intersects after any frame; returns the frame-summed continuous impacts
-/// the contact stage met after the steps, and each cloth's positions.
+/// Runs [`two_strips`] to its end ([`descended`]).
 fn descent_two_strips(bounded: bool) -> (f64, Vec<Vec<glam::Vec3>>) {
-    let mut scene = common::scene(&two_strips());
-    scene.solver.descent.get_or_insert_default().contact_bounds = bounded;
-    let mut sim = selvedge::Simulation::new(&scene, std::path::Path::new("scenes")).expect("the scene builds");
-    let mut impacts = 0.0;
-    for frame in 1..=sim.counts().time.frames {
-        sim.step_frame().unwrap_or_else(|e| panic!("{e}"));
-        assert_eq!(common::probe(&sim, "self_intersections"), 0.0, "frame {frame}: the strips crossed");
-        impacts += common::probe(&sim, "self_impacts");
-    }
-    let world = sim.world_mut();
-    let positions = world.query::<&Particles>().iter(world).map(|p| p.position.clone()).collect();
-    (impacts, positions)
+    let mut sim = common::simulation(&two_strips(bounded));
+    let frames = sim.counts().time.frames;
+    descended(&mut sim, frames)
 }
 
 #[test]
