@@ -29,7 +29,7 @@
 //! [`MotionBounds`]: crate::collision::motion_bounds::MotionBounds
 //! [`body_bounds`]: crate::collision::body_bounds
 
-use glam::{Mat3, Vec3};
+use glam::{Mat3, Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::elements::BlockPattern;
@@ -238,6 +238,28 @@ impl Frame<'_> {
 /// Most measures of the bounds that [`advance_anchor`] makes.
 const MAX_ADVANCES: u32 = 16;
 
+/// Below this squared length of a body's plane normal through a particle's filter,
+/// `|S n|²`, the filter fixes the particle's motion along the normal (the normal within
+/// 0.06° of its constraint's).
+const FIXED_NORMAL: f32 = 1e-6;
+
+/// Measures the bounds at the anchor for moves as long as `wanted`, then takes the body's
+/// plane out of the bound of a particle whose filter fixes the motion along the plane's
+/// normal: that motion is its constraint's (a resting contact's, which keeps it on the
+/// body), not the sweeps'. The sweeps' moves of such a particle lie along the plane, and
+/// the normal part of one is round-off; where the particle rests on the plane with no
+/// room to spare, that round-off led the plane to cut the whole move, slide and all. On
+/// Zheng's slope at one step a frame every slide faster than 3.5 m/s was so cut, and the
+/// cloth, sliding at 3.12 m/s², slowed at 1.2 m/s² instead.
+fn measure(motion: &mut BoundedMotion<'_>, wanted: f32, filter: &Filters, bounds: &mut [Bound]) {
+    (motion.bound)(motion.anchor, wanted, bounds);
+    bounds.par_iter_mut().enumerate().with_min_len(super::PARALLEL_MIN_LEN).for_each(|(i, bound)| {
+        if !filter.is_free(i) && filter.apply(i, bound.plane.truncate()).length_squared() < FIXED_NORMAL {
+            bound.plane = Vec4::ZERO;
+        }
+    });
+}
+
 /// Moves the anchor towards where `delta` starts the particles, in steps within the
 /// bounds, measuring them again after each, while that brings the farthest particle
 /// closer by a quarter (a move that would not is not made, which spares the measure
@@ -258,7 +280,7 @@ fn advance_anchor(motion: &mut BoundedMotion<'_>, delta: &mut [Vec3], filter: &F
         .map(|i| frame.offset(i, delta[i]).length())
         .reduce(|| 0.0, f32::max);
     for advance in 1..=MAX_ADVANCES {
-        (motion.bound)(motion.anchor, wanted, bounds);
+        measure(motion, wanted, filter, bounds);
         // How many particles the bounds stop short of the start, and how far from it the
         // farthest would be left after a move.
         let frame = motion.frame();
@@ -414,7 +436,7 @@ pub fn descend(
             && (sweep + 1).trailing_zeros() % 2 == 0
         {
             motion.settle(delta);
-            (motion.bound)(motion.anchor, wanted, &mut ws.bounds);
+            measure(motion, wanted, filter, &mut ws.bounds);
             cuts = 0;
         }
     }
