@@ -13,7 +13,7 @@ use crate::components::{
 };
 use crate::resources::{ClothContacts, PropWorld, SimClock, SolverSettings, StepSettings};
 use crate::schedule::{FrameSystems, SimSchedules, SubstepSystems};
-use crate::solver::contact_springs::{ContactSpring, Stencil};
+use crate::solver::contact_springs::{Across, ContactSpring, Stencil};
 use crate::solver::gather::reserve_floored;
 
 /// Resolves every cloth's contacts with every collider at the end of the step (the
@@ -161,7 +161,9 @@ pub fn collide_cloths(
             mesh.friction.extend(std::iter::repeat_n(collision.friction, particles.len()));
             mesh.layer.extend(std::iter::repeat_n(collision.layer, particles.len()));
             mesh.cloth.extend(std::iter::repeat_n(index as u32, particles.len()));
+            mesh.first.push(offset);
         }
+        mesh.first.push(mesh.half_gap.len() as u32);
         contacts.mesh = mesh;
         // A new mesh may start tangled: the solver starts over, looking for crossings.
         contacts.solver = SelfContactSolver::default();
@@ -190,21 +192,58 @@ pub fn collide_cloths(
     let report = solver.resolve(mesh, settings.dt, start, end, velocity);
     frame.add(&report);
     solver.springs(mesh, settings.dt, start, end, velocity, springs);
-    let mut offset = 0;
-    for (_, mut particles, .., mut touching) in &mut cloths {
-        let range = offset..offset + particles.len();
+    for (c, (_, mut particles, .., mut touching)) in (&mut cloths).into_iter().enumerate() {
+        let range = mesh.first[c] as usize..mesh.first[c + 1] as usize;
         particles.position.copy_from_slice(&end[range.clone()]);
-        particles.velocity.copy_from_slice(&velocity[range.clone()]);
-        // A spring's vertices are all of one cloth (the only ones its implicit step sees).
-        let within = |s: &&ContactSpring| range.contains(&(s.stencil.vertices[0] as usize));
-        touching.0.clear();
-        reserve_floored(&mut touching.0, springs.len());
-        touching.0.extend(springs.iter().filter(within).map(|s| {
-            let stencil = Stencil { vertices: s.stencil.vertices.map(|k| k - offset as u32), ..s.stencil };
-            ContactSpring { stencil, ..*s }
-        }));
-        offset += particles.len();
+        particles.velocity.copy_from_slice(&velocity[range]);
+        let SelfTouching { springs: own, across } = &mut *touching;
+        own.clear();
+        across.clear();
+        reserve_floored(own, springs.len());
+        for s in springs.iter() {
+            if let Some(spring) = split_spring(s, c as u32, mesh, end, velocity, own.len(), across) {
+                own.push(spring);
+            }
+        }
     }
+}
+
+/// The spring of cloth `cloth` that `spring` (in the contact mesh's numbers) makes, if any
+/// of its vertices is the cloth's: the spring itself in the cloth's numbers, or, for a
+/// pair with another cloth, this cloth's side of it, the other's vertices weighed zero and
+/// their part placed where that cloth stands now (the step places it again where it will
+/// be, [`Across::outside`]), the other side pushed to `across` as the cloth's spring `index`.
+/// `position` and `velocity` are the mesh's particles'.
+fn split_spring(
+    spring: &ContactSpring,
+    cloth: u32,
+    mesh: &ContactMesh,
+    position: &[Vec3],
+    velocity: &[Vec3],
+    index: usize,
+    across: &mut Vec<Across>,
+) -> Option<ContactSpring> {
+    let Stencil { vertices, weights } = spring.stencil;
+    let (cloths, first) = (&mesh.cloth, &mesh.first);
+    let own = vertices.iter().position(|&k| cloths[k as usize] == cloth)?;
+    let local = |k: u32| k - first[cloths[k as usize] as usize];
+    let mut stencil = Stencil { vertices: vertices.map(local), weights };
+    let mut other = Across { spring: index as u32, cloth, vertices: [0; 3], weights: [0.0; 3] };
+    for (slot, k) in (0..4).filter(|&k| cloths[vertices[k] as usize] != cloth).enumerate() {
+        other.cloth = cloths[vertices[k] as usize];
+        other.vertices[slot] = stencil.vertices[k];
+        other.weights[slot] = weights[k];
+        stencil.vertices[k] = stencil.vertices[own];
+        stencil.weights[k] = 0.0;
+    }
+    let mut spring = ContactSpring { stencil, ..*spring };
+    if other.cloth != cloth {
+        let range = first[other.cloth as usize] as usize..first[other.cloth as usize + 1] as usize;
+        spring.outside = other.outside(&position[range.clone()], &velocity[range]);
+        reserve_floored(across, 1);
+        across.push(other);
+    }
+    Some(spring)
 }
 
 /// Starts each frame's contact sums from zero. Runs in [`FrameSystems::Prepare`].

@@ -8,9 +8,10 @@ use crate::collision::body_contact::ContactBody;
 use crate::collision::coupling::PropCoupling;
 use crate::collision::motion_bounds::{ClothSurfaces, Surface};
 use crate::components::{Cloth, Collider, Particles, Prop, SelfCollision, SelfTouching, SolverWorkspace, Touching};
-use crate::resources::{HealthProblem, HealthReport, IntegratorStats, SolverSettings, StepSettings};
+use crate::resources::{ClothContacts, HealthProblem, HealthReport, IntegratorStats, SolverSettings, StepSettings};
 use crate::schedule::{SimSchedules, SubstepSystems};
 use crate::solver::cfl::cfl_step;
+use crate::solver::contact_springs::ClothEnds;
 use crate::solver::forces::ClothDynamics;
 use crate::solver::implicit::ConstraintBodies;
 use crate::solver::integrate::{Dynamics, StepReport, step};
@@ -25,7 +26,9 @@ pub fn integrate_cloths(
     environment: ForceEnvironment,
     mut stats: ResMut<IntegratorStats>,
     mut health: ResMut<HealthReport>,
+    contacts: Res<ClothContacts>,
     mut cloths: Query<(
+        Entity,
         &Cloth,
         &mut Particles,
         ForceElements,
@@ -38,14 +41,26 @@ pub fn integrate_cloths(
     mut props: Local<PropCoupling>,
     mut bodies: Local<Vec<ContactBody>>,
     mut surfaces: Local<ClothSurfaces>,
+    mut ends: Local<ClothEnds>,
 ) {
     // Block descent bounds each cloth's sweeps by the other cloths it collides with too,
     // where they stand when its turn comes: those before it where their steps ended.
     let colliding = cloths.iter().filter(|(.., self_collision, _)| *self_collision).count();
+    // Springs with another cloth hold their side against where the other will be: those
+    // before it where their steps ended, the others where their velocities take them.
+    let mesh_number = |entity: Entity| contacts.members.iter().position(|&(e, _)| e == entity);
+    let across = cloths.iter().any(|(.., touching)| touching.is_some_and(|t| !t.across.is_empty()));
+    if across {
+        for (entity, _, particles, ..) in &cloths {
+            if let Some(number) = mesh_number(entity) {
+                ends.expect(number, &particles.position, &particles.velocity, settings.dt);
+            }
+        }
+    }
     let bounded = solver.integrator.bounds_contact(&solver.method) && colliding > 1;
     if bounded {
         surfaces.clear();
-        for (_, particles, (_, _, triangles, _, _, topology, _), .., self_collision, _) in &cloths {
+        for (_, _, particles, (_, _, triangles, _, _, topology, _), .., self_collision, _) in &cloths {
             if self_collision {
                 let triangles = &triangles.indices;
                 surfaces.add(Surface { triangles, edges: topology.edges(triangles) }, &particles.position);
@@ -53,7 +68,7 @@ pub fn integrate_cloths(
         }
     }
     let mut members = 0;
-    for (index, (cloth, mut particles, elements, touching, mut workspace, self_collision, self_touching)) in
+    for (index, (entity, cloth, mut particles, elements, touching, mut workspace, self_collision, self_touching)) in
         cloths.iter_mut().enumerate()
     {
         // The cloth's number among those bounded by one another: the query yields the
@@ -107,7 +122,11 @@ pub fn integrate_cloths(
             scratch: forces,
             self_collision,
             others: member.and_then(|m| surfaces.others(m)),
-            contact_springs: self_touching.map_or(&mut [], |s| s.into_inner().0.as_mut_slice()),
+            contact_springs: self_touching.map_or(&mut [], |s| {
+                let SelfTouching { springs, across } = s.into_inner();
+                ends.place(across, springs);
+                springs.as_mut_slice()
+            }),
             bodies: &bodies,
             start_force: whole_start_force.then_some(&particles.force),
         };
@@ -151,6 +170,9 @@ pub fn integrate_cloths(
         particles.velocity = v;
         if let Some(member) = member {
             surfaces.moved(member, &particles.position);
+        }
+        if let Some(number) = mesh_number(entity).filter(|_| across) {
+            ends.ended(number, &particles.position, &particles.velocity);
         }
         // Only the contact with bodies reads the support: with no collider none is kept
         // (12 bytes a particle).

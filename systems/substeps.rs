@@ -101,7 +101,7 @@ pub fn plan_frame_steps(
     let last = settings.dt;
     *settings = adaptive.settings(adaptive.steps(reach));
     if settings.dt != last {
-        for spring in touching.iter_mut().flat_map(|t| t.into_inner().0.iter_mut()) {
+        for spring in touching.iter_mut().flat_map(|t| t.into_inner().springs.iter_mut()) {
             spring.restep(last, settings.dt);
         }
     }

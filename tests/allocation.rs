@@ -12,6 +12,7 @@ mod common;
 
 use std::alloc::System;
 
+use glam::Vec3;
 use selvedge::Simulation;
 use selvedge::solver::integrate::Integrator;
 use stats_alloc::{INSTRUMENTED_SYSTEM, Region, StatsAlloc};
@@ -102,6 +103,12 @@ fn the_bench_scenes_allocate_nothing_once_warm() {
         let count = allocations_after(&mut sim, warm_up, 20);
         assert_eq!(count, 0, "{name} allocated {count} times in frames {} to {}", warm_up + 1, warm_up + 20);
     }
+    // Two cloths resting on each other, their close pairs springs of each cloth's step,
+    // placed against the other before each step. Gravity straight down: on the scene's
+    // slope the upper cloth slides on, and the contact lists grow as it goes.
+    let mut sim = common::bundled_with("layer_slope_cloths.ron", |scene| scene.gravity = Vec3::new(0.0, -9.8, 0.0));
+    let count = allocations_after(&mut sim, 30, 20);
+    assert_eq!(count, 0, "two cloths resting on each other allocated {count} times in frames 31 to 50");
 }
 
 fn frames_whose_steps_follow_the_motion_allocate_nothing_once_warm() {

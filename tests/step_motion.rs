@@ -210,7 +210,7 @@ fn self_contact_springs_are_made_over_when_the_frame_takes_another_number_of_ste
         let world = sim.world_mut();
         let h = world.resource::<StepSettings>().dt;
         let (springs, topology) = world.query::<(&SelfTouching, &ClothTopology)>().single(world).expect("one cloth");
-        let live: Vec<_> = springs.0.iter().filter(|s| s.stiffness > 0.0).collect();
+        let live: Vec<_> = springs.springs.iter().filter(|s| s.stiffness > 0.0).collect();
         changes += usize::from(h != last_dt && !live.is_empty());
         for spring in live {
             let khw = spring.stiffness * h * h * spring.stencil.inverse_mass(&topology.free_inv_mass);

@@ -31,7 +31,7 @@ use super::bvh::{Aabb, Bvh};
 use super::primitives::{Sweep, closest_between_segments, closest_on_triangle};
 use super::untangle::Untangler;
 use crate::solver::PARALLEL_MIN_LEN;
-use crate::solver::contact_springs::{ContactSpring, Stencil, spring_step};
+use crate::solver::contact_springs::{ContactSpring, Outside, Stencil, spring_step};
 use crate::solver::elements::spring::outer;
 use crate::solver::gather::{Gather, reserve_floored};
 
@@ -58,7 +58,9 @@ pub struct ContactMesh {
     pub layer: Vec<u32>,
     /// Each vertex's cloth (its place among the cloths of the mesh).
     pub cloth: Vec<u32>,
-    /// Whether the cloths' implicit steps hold their own close pairs apart with
+    /// Each cloth's first vertex, and after the last cloth's the number of vertices.
+    pub first: Vec<u32>,
+    /// Whether the cloths' implicit steps hold their close pairs apart with
     /// [`ContactSpring`]s ([`SelfContactSolver::springs`]).
     pub springs: bool,
 }
@@ -922,13 +924,6 @@ fn close(mesh: &ContactMesh, pair: Pair, x: &[Vec3], reach: f32) -> Option<Close
     Some(Close { stencil, normal, gap, distance, friction })
 }
 
-/// Whether the implicit step held `pair` apart with a spring: the mesh's cloths solve
-/// with springs and the pair lies within one cloth.
-fn sprung(mesh: &ContactMesh, pair: Pair) -> bool {
-    let vertices = pair_vertices(mesh, pair);
-    mesh.springs && vertices.iter().all(|&k| mesh.cloth[k as usize] == mesh.cloth[vertices[0] as usize])
-}
-
 /// The proximity contact of a pair at the start of the step, if it is closer than its
 /// separation: the impulse will make its normal velocity restore [`GAP_RECOVERY`] of the
 /// missing gap over the step.
@@ -938,10 +933,11 @@ fn proximity(mesh: &ContactMesh, pair: Pair, h: f32, x0: &[Vec3]) -> Option<Cont
 }
 
 /// The spring that holds a pair closer than its separation at `x` apart in the next
-/// implicit step (see [`ContactSpring`]), if the pair is within one cloth and any of its
-/// vertices is free. Stiff enough to restore [`SPRING_RECOVERY`] of the missing gap
-/// within a step of length `h` on its own: `k = r m / h²` for the pair's effective mass
-/// `m = 1 / Σ (w² / m_k)`, and no softer than for a step of
+/// implicit step (see [`ContactSpring`]), if any of its vertices is free; in the mesh's
+/// numbers, whichever cloths its sides belong to (a pair with another cloth becomes a
+/// spring of each, `systems::contacts`). Stiff enough to restore [`SPRING_RECOVERY`] of
+/// the missing gap within a step of length `h` on its own: `k = r m / h²` for the pair's
+/// effective mass `m = 1 / Σ (w² / m_k)`, and no softer than for a step of
 /// [`SPRING_STEP`](crate::solver::contact_springs::SPRING_STEP) ([`spring_step`]). Its
 /// friction is first lagged from the push at `x` and the velocities `v`
 /// ([`ContactSpring::lag_friction`]); the step lags it again from its own solution
@@ -966,9 +962,6 @@ fn proximity(mesh: &ContactMesh, pair: Pair, h: f32, x0: &[Vec3]) -> Option<Cont
 /// primitives next to it hold the layers apart there, and the contact stage still sees
 /// the boundary pair.
 fn spring(mesh: &ContactMesh, pair: Pair, h: f32, x: &[Vec3], v: &[Vec3]) -> Option<ContactSpring> {
-    if !sprung(mesh, pair) {
-        return None;
-    }
     let Close { stencil, normal, gap, distance, friction } = close(mesh, pair, x, SPRING_REACH)?;
     if stencil.weights.contains(&0.0) {
         return None;
@@ -978,9 +971,27 @@ fn spring(mesh: &ContactMesh, pair: Pair, h: f32, x: &[Vec3], v: &[Vec3]) -> Opt
         let made_for = spring_step(h);
         let stiffness = SPRING_RATIO / (inv_mass * made_for * made_for);
         if distance >= gap {
-            return ContactSpring { stencil, normal, gap, stiffness: 0.0, friction, drag: 0.0, armed: stiffness };
+            return ContactSpring {
+                stencil,
+                normal,
+                gap,
+                stiffness: 0.0,
+                friction,
+                drag: 0.0,
+                armed: stiffness,
+                outside: Outside::default(),
+            };
         }
-        let mut spring = ContactSpring { stencil, normal, gap, stiffness, friction, drag: 0.0, armed: 0.0 };
+        let mut spring = ContactSpring {
+            stencil,
+            normal,
+            gap,
+            stiffness,
+            friction,
+            drag: 0.0,
+            armed: 0.0,
+            outside: Outside::default(),
+        };
         spring.lag_friction(stiffness * (gap - distance), v);
         spring
     })
@@ -1078,6 +1089,7 @@ mod tests {
             friction: vec![0.0; 8],
             layer: vec![0; 8],
             cloth: vec![0; 8],
+            first: vec![0, 8],
             springs: false,
         };
         (mesh, x)
@@ -1242,6 +1254,7 @@ mod tests {
             friction: vec![0.2; x.len()],
             layer: vec![0; x.len()],
             cloth: vec![0; x.len()],
+            first: vec![0, x.len() as u32],
             springs: false,
             triangles,
         };

@@ -8,7 +8,7 @@ use parry3d::shape::SharedShape;
 use crate::collision::body_contact::{ContactBody, ContactTotals, Touch};
 use crate::collision::collider::{ColliderMotion, ContactResponse};
 use crate::collision::features::SharpFeatures;
-use crate::solver::contact_springs::ContactSpring;
+use crate::solver::contact_springs::{Across, ContactSpring};
 
 /// A static or kinematic solid body (E5, D11, B5): a parry3d shape that moves along its
 /// motion. Its own entity.
@@ -83,10 +83,15 @@ impl std::fmt::Debug for Collider {
 pub struct Touching(pub Vec<Touch>);
 
 /// The pairs of a self-colliding cloth that the last step left closer than their
-/// separation, as the springs that hold them apart in the next implicit step (the
-/// cloth's particle numbers). Pairs with another cloth are left to the contact stage.
+/// separation, with itself and with the other self-colliding cloths, as the springs that
+/// hold them apart in the next implicit step (the cloth's particle numbers).
 #[derive(Component, Debug, Clone, Default, PartialEq)]
-pub struct SelfTouching(pub Vec<ContactSpring>);
+pub struct SelfTouching {
+    /// The springs.
+    pub springs: Vec<ContactSpring>,
+    /// The other side of each spring of a pair with another cloth.
+    pub across: Vec<Across>,
+}
 
 /// Contact of one cloth with the bodies, summed over the steps of the current frame.
 #[derive(Component, Debug, Clone, Copy, Default, PartialEq)]

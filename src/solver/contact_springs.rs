@@ -85,11 +85,14 @@ pub fn spring_step(h: f32) -> f32 {
 /// damper rather than Coulomb's constant force [m/s].
 const STATIC_SPEED: f32 = 1e-3;
 
-/// A pair of primitives of one cloth held apart in the implicit step: its distance along
-/// `normal` is pushed towards `gap`.
+/// A pair of primitives held apart in a cloth's implicit step: its distance along
+/// `normal` is pushed towards `gap`. A pair with another cloth is a spring of each
+/// cloth's, which holds its own side against the other's where that side stands
+/// ([`Outside`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactSpring {
-    /// The pair.
+    /// The pair, in the cloth's particle numbers; the other cloth's vertices of a pair with
+    /// another cloth are weighed zero (their part is `outside`).
     pub stencil: Stencil,
     /// Unit normal from the second side to the first at the start of the step.
     pub normal: Vec3,
@@ -106,13 +109,106 @@ pub struct ContactSpring {
     /// the pair within it ([`lag`]) [N/m]; zero for one made within its gap, whose
     /// release is final.
     pub armed: f32,
+    /// Another cloth's part of the pair; zero for a pair within the cloth.
+    pub outside: Outside,
+}
+
+/// Another cloth's part of a pair's relative position and velocity, `Σ w x` and `Σ w v`
+/// over its vertices, which stand still while this cloth's step is solved. The cloths step
+/// one after another, so the other side is placed before each step of this cloth
+/// ([`Across::outside`]): where the other cloth's step ended if it has stepped, else where
+/// its velocity takes it within the step. The step's push then asks this side to keep
+/// the gap from where the other will be, which its own step, later, corrects no more
+/// than what is left: two layers landing on each other are not both thrown back.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Outside {
+    /// Part of the relative position at the end of the step [m].
+    pub position: Vec3,
+    /// Part of the relative velocity [m/s].
+    pub velocity: Vec3,
+}
+
+/// A spring's side in another cloth, by which [`Outside`] is placed: that cloth, and the
+/// spring's vertices there (in its particle numbers) with their weights.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Across {
+    /// The spring, in its cloth's list.
+    pub spring: u32,
+    /// The other cloth, by its number among the cloths that collide with one another.
+    pub cloth: u32,
+    /// Its vertices of the pair.
+    pub vertices: [u32; 3],
+    /// Their weights in the pair's relative position (zero where a slot is unused).
+    pub weights: [f32; 3],
+}
+
+impl Across {
+    /// The spring's other side with the other cloth's particles at `position`, moving at
+    /// `velocity`: where its step will end, and how fast.
+    pub fn outside(&self, position: &[Vec3], velocity: &[Vec3]) -> Outside {
+        let sum = |x: &[Vec3]| (0..3).map(|k| self.weights[k] * x[self.vertices[k] as usize]).sum::<Vec3>();
+        Outside { position: sum(position), velocity: sum(velocity) }
+    }
+}
+
+/// Where the cloths that collide with one another stand in a step's turn of them: one not
+/// yet stepped where its velocity takes it within the step, one that has stepped where
+/// its step ended, with their velocities; by their numbers among those cloths. Places the
+/// other side of each spring with another cloth before its cloth steps
+/// ([`ClothEnds::place`]). Kept from step to step, so that a warm step allocates nothing.
+#[derive(Debug, Clone, Default)]
+pub struct ClothEnds {
+    position: Vec<Vec<Vec3>>,
+    velocity: Vec<Vec<Vec3>>,
+}
+
+impl ClothEnds {
+    /// Cloth `cloth`, its particles at `x` moving at `v`, before a step of `h` [s]: where
+    /// they will be at its end if their velocities hold.
+    pub fn expect(&mut self, cloth: usize, x: &[Vec3], v: &[Vec3], h: f32) {
+        self.ended(cloth, x, v);
+        for (end, v) in self.position[cloth].iter_mut().zip(v) {
+            *end += h * *v;
+        }
+    }
+
+    /// Cloth `cloth` after its step: its particles at `x`, moving at `v`.
+    pub fn ended(&mut self, cloth: usize, x: &[Vec3], v: &[Vec3]) {
+        if self.position.len() <= cloth {
+            self.position.resize_with(cloth + 1, Vec::new);
+            self.velocity.resize_with(cloth + 1, Vec::new);
+        }
+        self.position[cloth].clear();
+        self.position[cloth].extend_from_slice(x);
+        self.velocity[cloth].clear();
+        self.velocity[cloth].extend_from_slice(v);
+    }
+
+    /// Places the other side of `springs` by their `across`.
+    pub fn place(&self, across: &[Across], springs: &mut [ContactSpring]) {
+        for a in across {
+            let cloth = a.cloth as usize;
+            springs[a.spring as usize].outside = a.outside(&self.position[cloth], &self.velocity[cloth]);
+        }
+    }
 }
 
 impl ContactSpring {
+    /// The pair's relative position at `x` (the cloth's particles), its other cloth's part
+    /// included.
+    fn relative_position(&self, x: &[Vec3]) -> Vec3 {
+        self.stencil.relative(x) + self.outside.position
+    }
+
+    /// The pair's relative velocity at `v`, its other cloth's part included.
+    fn relative_velocity(&self, v: &[Vec3]) -> Vec3 {
+        self.stencil.relative(v) + self.outside.velocity
+    }
+
     /// The spring's push along its normal at `x` [N]: `k (gap − d)`, negative where it
     /// pulls (the pair has come further apart than its gap).
     pub fn push(&self, x: &[Vec3]) -> f32 {
-        self.stiffness * (self.gap - self.stencil.relative(x).dot(self.normal))
+        self.stiffness * (self.gap - self.relative_position(x).dot(self.normal))
     }
 
     /// The force on the pair's first side at `(x, v)`: the spring's push, `k (gap − d) n`,
@@ -123,7 +219,7 @@ impl ContactSpring {
 
     /// The pair's relative velocity across the normal at `v` [m/s].
     fn slip(&self, v: &[Vec3]) -> Vec3 {
-        let relative = self.stencil.relative(v);
+        let relative = self.relative_velocity(v);
         relative - relative.dot(self.normal) * self.normal
     }
 
@@ -157,7 +253,7 @@ impl ContactSpring {
 
     /// Whether the spring is armed, not engaged, and its pair is within its gap at `x`.
     fn engages(&self, x: &[Vec3]) -> bool {
-        self.stiffness == 0.0 && self.armed > 0.0 && self.stencil.relative(x).dot(self.normal) < self.gap
+        self.stiffness == 0.0 && self.armed > 0.0 && self.relative_position(x).dot(self.normal) < self.gap
     }
 
     /// The spring lagged from the end `(x, v)` of a step solved with it: its friction
@@ -325,6 +421,7 @@ mod tests {
             friction: 0.5,
             drag: 0.3,
             armed: 0.0,
+            outside: Outside::default(),
         };
         (s, x)
     }

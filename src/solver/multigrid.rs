@@ -1942,7 +1942,7 @@ impl CoarsestSolver {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solver::contact_springs::{Stencil, add_diagonal};
+    use crate::solver::contact_springs::{Outside, Stencil, add_diagonal};
     use crate::solver::elements::ConstantCouplings;
 
     /// An `n × n` grid of unit spacing, each quad split along one diagonal, as the system
@@ -2327,6 +2327,7 @@ mod tests {
                     friction: 0.3,
                     drag: 20.0,
                     armed: 0.0,
+                    outside: Outside::default(),
                 })
                 .collect()
         };
@@ -2384,7 +2385,16 @@ mod tests {
                     _ => Stencil::edge_edge([p, p + 1], [q, q + n_side], 0.3, 0.6),
                 };
                 let normal = Vec3::new(0.1 * k as f32, 1.0, -0.2).normalize();
-                ContactSpring { stencil, normal, gap: 0.002, stiffness: 500.0, friction: 0.3, drag: 20.0, armed: 0.0 }
+                ContactSpring {
+                    stencil,
+                    normal,
+                    gap: 0.002,
+                    stiffness: 500.0,
+                    friction: 0.3,
+                    drag: 20.0,
+                    armed: 0.0,
+                    outside: Outside::default(),
+                }
             })
             .collect();
         let weights = Weights { stiffness: 0.5, drag: 0.1 };
@@ -2474,6 +2484,7 @@ mod tests {
                 friction: 0.0,
                 drag: 0.0,
                 armed: 0.0,
+                outside: Outside::default(),
             })
             .collect();
         let weights = Weights { stiffness: 1.0, drag: 0.0 };
