@@ -210,10 +210,15 @@ pub fn collide_cloths(
 
 /// The spring of cloth `cloth` that `spring` (in the contact mesh's numbers) makes, if any
 /// of its vertices is the cloth's: the spring itself in the cloth's numbers, or, for a
-/// pair with another cloth, this cloth's side of it, the other's vertices weighed zero and
-/// their part placed where that cloth stands now (the step places it again where it will
-/// be, [`Across::outside`]), the other side pushed to `across` as the cloth's spring `index`.
-/// `position` and `velocity` are the mesh's particles'.
+/// pair with another cloth whose side the contact stage holds (pinned, or resting on a
+/// body), this cloth's side of it, the other's vertices weighed zero and their part
+/// placed where that cloth stands now (the step places it again where it will be,
+/// `ClothEnds::place`), the other side pushed to `across` as the cloth's spring `index`.
+/// A pair with a free side of another cloth makes none: a spring of one cloth has no
+/// reaction on the other, and a cloth landing on a free cloth was stopped dead, its
+/// momentum lost (or, held against where the free cloth would be, the two were thrown
+/// apart with six times the energy there was); the contact stage's impulses, which act
+/// on both, keep it. `position` and `velocity` are the mesh's particles'.
 fn split_spring(
     spring: &ContactSpring,
     cloth: u32,
@@ -226,10 +231,14 @@ fn split_spring(
     let Stencil { vertices, weights } = spring.stencil;
     let (cloths, first) = (&mesh.cloth, &mesh.first);
     let own = vertices.iter().position(|&k| cloths[k as usize] == cloth)?;
+    let outside = |k: &u32| cloths[*k as usize] != cloth;
+    if vertices.iter().filter(|k| outside(k)).any(|&k| mesh.impulse_inv_mass[k as usize] > 0.0) {
+        return None;
+    }
     let local = |k: u32| k - first[cloths[k as usize] as usize];
     let mut stencil = Stencil { vertices: vertices.map(local), weights };
     let mut other = Across { spring: index as u32, cloth, vertices: [0; 3], weights: [0.0; 3] };
-    for (slot, k) in (0..4).filter(|&k| cloths[vertices[k] as usize] != cloth).enumerate() {
+    for (slot, k) in (0..4).filter(|&k| outside(&vertices[k])).enumerate() {
         other.cloth = cloths[vertices[k] as usize];
         other.vertices[slot] = stencil.vertices[k];
         other.weights[slot] = weights[k];

@@ -46,8 +46,8 @@ pub fn integrate_cloths(
     // Block descent bounds each cloth's sweeps by the other cloths it collides with too,
     // where they stand when its turn comes: those before it where their steps ended.
     let colliding = cloths.iter().filter(|(.., self_collision, _)| *self_collision).count();
-    // Springs with another cloth hold their side against where the other will be: those
-    // before it where their steps ended, the others where their velocities take them.
+    // Springs with another cloth's held side hold the cloth against where that side will
+    // be: on a cloth before this one where its step ended, else where its velocity takes it.
     let mesh_number = |entity: Entity| contacts.members.iter().position(|&(e, _)| e == entity);
     let across = cloths.iter().any(|(.., touching)| touching.is_some_and(|t| !t.across.is_empty()));
     if across {

@@ -935,7 +935,8 @@ fn proximity(mesh: &ContactMesh, pair: Pair, h: f32, x0: &[Vec3]) -> Option<Cont
 /// The spring that holds a pair closer than its separation at `x` apart in the next
 /// implicit step (see [`ContactSpring`]), if any of its vertices is free; in the mesh's
 /// numbers, whichever cloths its sides belong to (a pair with another cloth becomes a
-/// spring of each, `systems::contacts`). Stiff enough to restore [`SPRING_RECOVERY`] of
+/// spring of the cloth whose side is free where the other's is held,
+/// `systems::contacts`). Stiff enough to restore [`SPRING_RECOVERY`] of
 /// the missing gap within a step of length `h` on its own: `k = r m / h²` for the pair's
 /// effective mass `m = 1 / Σ (w² / m_k)`, and no softer than for a step of
 /// [`SPRING_STEP`](crate::solver::contact_springs::SPRING_STEP) ([`spring_step`]). Its

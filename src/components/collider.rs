@@ -83,13 +83,14 @@ impl std::fmt::Debug for Collider {
 pub struct Touching(pub Vec<Touch>);
 
 /// The pairs of a self-colliding cloth that the last step left closer than their
-/// separation, with itself and with the other self-colliding cloths, as the springs that
-/// hold them apart in the next implicit step (the cloth's particle numbers).
+/// separation, with itself and with the held side (pinned, or resting on a body) of
+/// another self-colliding cloth, as the springs that hold them apart in the next implicit
+/// step (the cloth's particle numbers).
 #[derive(Component, Debug, Clone, Default, PartialEq)]
 pub struct SelfTouching {
     /// The springs.
     pub springs: Vec<ContactSpring>,
-    /// The other side of each spring of a pair with another cloth.
+    /// The held side of each spring of a pair with another cloth.
     pub across: Vec<Across>,
 }
 

@@ -86,8 +86,8 @@ pub fn spring_step(h: f32) -> f32 {
 const STATIC_SPEED: f32 = 1e-3;
 
 /// A pair of primitives held apart in a cloth's implicit step: its distance along
-/// `normal` is pushed towards `gap`. A pair with another cloth is a spring of each
-/// cloth's, which holds its own side against the other's where that side stands
+/// `normal` is pushed towards `gap`. A pair with another cloth is a spring of the cloth
+/// whose side is free, holding it against the other side where that stands held
 /// ([`Outside`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactSpring {
@@ -114,12 +114,14 @@ pub struct ContactSpring {
 }
 
 /// Another cloth's part of a pair's relative position and velocity, `Σ w x` and `Σ w v`
-/// over its vertices, which stand still while this cloth's step is solved. The cloths step
-/// one after another, so the other side is placed before each step of this cloth
-/// ([`Across::outside`]): where the other cloth's step ended if it has stepped, else where
-/// its velocity takes it within the step. The step's push then asks this side to keep
-/// the gap from where the other will be, which its own step, later, corrects no more
-/// than what is left: two layers landing on each other are not both thrown back.
+/// over its vertices, which stand still while this cloth's step is solved. Only a side
+/// that the contact stage holds (pinned, or resting on a body: its impulse inverse mass
+/// zero) is made so: its reaction goes into its pins or its body. A spring against a free
+/// cloth would have no reaction on it, and those pairs are left to the contact stage,
+/// whose impulses act on both sides (`systems::contacts::split_spring`). The side is
+/// placed before each step of this cloth where it will be at the step's end
+/// ([`ClothEnds::place`]): where its cloth's step ended if it has stepped, else where
+/// its velocity takes it (a pinned side stays, one resting on a moving body goes with it).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Outside {
     /// Part of the relative position at the end of the step [m].
