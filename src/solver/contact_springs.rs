@@ -335,8 +335,8 @@ fn acting(springs: &[ContactSpring]) -> impl Iterator<Item = &ContactSpring> {
 pub fn add_forces(springs: &[ContactSpring], x: &[Vec3], v: &[Vec3], force: &mut [Vec3]) {
     for s in acting(springs) {
         let push = s.force(x, v);
-        for k in 0..4 {
-            force[s.stencil.vertices[k] as usize] += s.stencil.weights[k] * push;
+        for (&vertex, &weight) in s.stencil.vertices.iter().zip(&s.stencil.weights).filter(|(_, w)| **w != 0.0) {
+            force[vertex as usize] += weight * push;
         }
     }
 }
@@ -379,10 +379,11 @@ pub fn add_product(springs: &[ContactSpring], weights: Weights, blocks: Blocks, 
     for s in acting(springs) {
         let block = s.block(weights);
         let total = s.stencil.relative(y);
-        for k in 0..4 {
-            let i = s.stencil.vertices[k] as usize;
-            let others = if blocks == Blocks::OffDiagonal { total - s.stencil.weights[k] * y[i] } else { total };
-            out[i] += s.stencil.weights[k] * (block * others);
+        // Every vertex takes the same product of the whole pair.
+        let whole = (blocks == Blocks::All).then(|| block * total);
+        for (&vertex, &weight) in s.stencil.vertices.iter().zip(&s.stencil.weights).filter(|(_, w)| **w != 0.0) {
+            let i = vertex as usize;
+            out[i] += weight * whole.unwrap_or_else(|| block * (total - weight * y[i]));
         }
     }
 }
@@ -402,7 +403,7 @@ pub fn add_diagonal(
 pub fn for_diagonal(springs: &[ContactSpring], weights: Weights, mut visit: impl FnMut(usize, Mat3)) {
     for s in acting(springs) {
         let block = s.block(weights);
-        for (&vertex, &weight) in s.stencil.vertices.iter().zip(&s.stencil.weights) {
+        for (&vertex, &weight) in s.stencil.vertices.iter().zip(&s.stencil.weights).filter(|(_, w)| **w != 0.0) {
             visit(vertex as usize, weight * weight * block);
         }
     }
