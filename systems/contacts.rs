@@ -151,7 +151,7 @@ pub fn collide_cloths(
     }
     if !members().eq(contacts.members.iter().copied()) {
         let mut mesh = ContactMesh::default();
-        for (index, (_, particles, triangles, topology, _, _, collision, _)) in cloths.iter().enumerate() {
+        for (_, particles, triangles, topology, _, _, collision, _) in &cloths {
             let offset = mesh.half_gap.len() as u32;
             mesh.triangles.extend(triangles.indices.iter().map(|t| t.map(|k| k + offset)));
             // Each cloth's edges are sorted and numbered above the last cloth's, so the
@@ -160,7 +160,6 @@ pub fn collide_cloths(
             mesh.half_gap.extend(std::iter::repeat_n(0.5 * collision.separation, particles.len()));
             mesh.friction.extend(std::iter::repeat_n(collision.friction, particles.len()));
             mesh.layer.extend(std::iter::repeat_n(collision.layer, particles.len()));
-            mesh.cloth.extend(std::iter::repeat_n(index as u32, particles.len()));
             mesh.first.push(offset);
         }
         mesh.first.push(mesh.half_gap.len() as u32);
@@ -201,7 +200,7 @@ pub fn collide_cloths(
         across.clear();
         reserve_floored(own, springs.len());
         for s in springs.iter() {
-            if let Some(spring) = split_spring(s, c as u32, mesh, end, velocity, own.len(), across) {
+            if let Some(spring) = split_spring(s, c as u32, mesh, own.len(), across) {
                 own.push(spring);
             }
         }
@@ -211,48 +210,41 @@ pub fn collide_cloths(
 /// The spring of cloth `cloth` that `spring` (in the contact mesh's numbers) makes, if any
 /// of its vertices is the cloth's: the spring itself in the cloth's numbers, or, for a
 /// pair with another cloth whose side the contact stage holds (pinned, or resting on a
-/// body), this cloth's side of it, the other's vertices weighed zero and their part
-/// placed where that cloth stands now (the step places it again where it will be,
-/// `ClothEnds::place`), the other side pushed to `across` as the cloth's spring `index`.
-/// A pair with a free side of another cloth makes none: a spring of one cloth has no
-/// reaction on the other, and a cloth landing on a free cloth was stopped dead, its
-/// momentum lost (or, held against where the free cloth would be, the two were thrown
-/// apart with six times the energy there was); the contact stage's impulses, which act
-/// on both, keep it. `position` and `velocity` are the mesh's particles'.
+/// body), this cloth's side of it, the other's vertices weighed zero, the other side
+/// pushed to `across` as the cloth's spring `index` (the step places it where it will be,
+/// `ClothEnds::place`). A pair with a free side of another cloth makes none: a spring of
+/// one cloth has no reaction on the other, and a cloth landing on a free cloth was
+/// stopped dead, its momentum lost (or, held against where the free cloth would be, the
+/// two were thrown apart with six times the energy there was); the contact stage's
+/// impulses, which act on both, keep it.
 fn split_spring(
     spring: &ContactSpring,
     cloth: u32,
     mesh: &ContactMesh,
-    position: &[Vec3],
-    velocity: &[Vec3],
     index: usize,
     across: &mut Vec<Across>,
 ) -> Option<ContactSpring> {
     let Stencil { vertices, weights } = spring.stencil;
-    let (cloths, first) = (&mesh.cloth, &mesh.first);
-    let own = vertices.iter().position(|&k| cloths[k as usize] == cloth)?;
-    let outside = |k: &u32| cloths[*k as usize] != cloth;
-    if vertices.iter().filter(|k| outside(k)).any(|&k| mesh.impulse_inv_mass[k as usize] > 0.0) {
+    let own = vertices.iter().position(|&k| mesh.cloth_of(k) == cloth)?;
+    let outside = |k: &u32| mesh.cloth_of(*k) != cloth;
+    if vertices.iter().filter(|k| outside(k)).any(|&k| !mesh.held(k)) {
         return None;
     }
-    let local = |k: u32| k - first[cloths[k as usize] as usize];
+    let local = |k: u32| k - mesh.first[mesh.cloth_of(k) as usize];
     let mut stencil = Stencil { vertices: vertices.map(local), weights };
     let mut other = Across { spring: index as u32, cloth, vertices: [0; 3], weights: [0.0; 3] };
     for (slot, k) in (0..4).filter(|&k| outside(&vertices[k])).enumerate() {
-        other.cloth = cloths[vertices[k] as usize];
+        other.cloth = mesh.cloth_of(vertices[k]);
         other.vertices[slot] = stencil.vertices[k];
         other.weights[slot] = weights[k];
         stencil.vertices[k] = stencil.vertices[own];
         stencil.weights[k] = 0.0;
     }
-    let mut spring = ContactSpring { stencil, ..*spring };
     if other.cloth != cloth {
-        let range = first[other.cloth as usize] as usize..first[other.cloth as usize + 1] as usize;
-        spring.outside = other.outside(&position[range.clone()], &velocity[range]);
         reserve_floored(across, 1);
         across.push(other);
     }
-    Some(spring)
+    Some(ContactSpring { stencil, ..*spring })
 }
 
 /// Starts each frame's contact sums from zero. Runs in [`FrameSystems::Prepare`].

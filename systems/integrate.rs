@@ -43,9 +43,6 @@ pub fn integrate_cloths(
     mut surfaces: Local<ClothSurfaces>,
     mut ends: Local<ClothEnds>,
 ) {
-    // Block descent bounds each cloth's sweeps by the other cloths it collides with too,
-    // where they stand when its turn comes: those before it where their steps ended.
-    let colliding = cloths.iter().filter(|(.., self_collision, _)| *self_collision).count();
     // Springs with another cloth's held side hold the cloth against where that side will
     // be: on a cloth before this one where its step ended, else where its velocity takes it.
     let mesh_number = |entity: Entity| contacts.members.iter().position(|&(e, _)| e == entity);
@@ -57,6 +54,9 @@ pub fn integrate_cloths(
             }
         }
     }
+    // Block descent bounds each cloth's sweeps by the other cloths it collides with too,
+    // where they stand when its turn comes: those before it where their steps ended.
+    let colliding = cloths.iter().filter(|(.., self_collision, _)| *self_collision).count();
     let bounded = solver.integrator.bounds_contact(&solver.method) && colliding > 1;
     if bounded {
         surfaces.clear();

@@ -56,9 +56,8 @@ pub struct ContactMesh {
     /// Each vertex's layer: a higher layer belongs on the side of a lower layer's
     /// triangle normals, which is how untangling knows which side is wrong.
     pub layer: Vec<u32>,
-    /// Each vertex's cloth (its place among the cloths of the mesh).
-    pub cloth: Vec<u32>,
-    /// Each cloth's first vertex, and after the last cloth's the number of vertices.
+    /// Each cloth's first vertex (the cloths numbered by their place in the mesh), and
+    /// after the last cloth's the number of vertices.
     pub first: Vec<u32>,
     /// Whether the cloths' implicit steps hold their close pairs apart with
     /// [`ContactSpring`]s ([`SelfContactSolver::springs`]).
@@ -89,6 +88,16 @@ impl ContactMesh {
     /// Whether the mesh has no vertex.
     pub fn is_empty(&self) -> bool {
         self.half_gap.is_empty()
+    }
+
+    /// Vertex `k`'s cloth.
+    pub fn cloth_of(&self, k: u32) -> u32 {
+        (self.first.partition_point(|&first| first <= k) - 1) as u32
+    }
+
+    /// Whether impulses leave vertex `k` where it is: pinned, or resting on a body.
+    pub fn held(&self, k: u32) -> bool {
+        self.impulse_inv_mass[k as usize] == 0.0
     }
 }
 
@@ -303,8 +312,7 @@ impl SelfContactSolver {
         let pairs = &self.pairs;
         self.contact_gather.run(pairs.len(), &mut self.contacts, |i, out| out.extend(proximity(mesh, pairs[i], h, x0)));
         // A point–triangle contact's point is its stencil's first vertex, weighed 1.
-        let held =
-            |c: &Contact| c.stencil.weights[0] == 1.0 && mesh.impulse_inv_mass[c.stencil.vertices[0] as usize] == 0.0;
+        let held = |c: &Contact| c.stencil.weights[0] == 1.0 && mesh.held(c.stencil.vertices[0]);
         held_last(&mut self.contacts, &mut self.held_contacts, held);
         report.proximity = self.contacts.len() as u32;
         for contact in &self.contacts {
@@ -728,7 +736,7 @@ impl SelfContactSolver {
                 out.push(pairs[i]);
             }
         });
-        let held = |pair: &Pair| matches!(*pair, Pair::PointTriangle(p, _) if mesh.impulse_inv_mass[p as usize] == 0.0);
+        let held = |pair: &Pair| matches!(*pair, Pair::PointTriangle(p, _) if mesh.held(p));
         held_last(&mut self.hits, &mut self.held_hits, held);
     }
 
@@ -1001,19 +1009,7 @@ fn spring(mesh: &ContactMesh, pair: Pair, h: f32, x: &[Vec3], v: &[Vec3]) -> Opt
     (inv_mass > 0.0).then(|| {
         let made_for = spring_step(h);
         let stiffness = SPRING_RATIO / (inv_mass * made_for * made_for);
-        if distance >= gap {
-            return ContactSpring {
-                stencil,
-                normal,
-                gap,
-                stiffness: 0.0,
-                friction,
-                drag: 0.0,
-                armed: stiffness,
-                outside: Outside::default(),
-            };
-        }
-        let mut spring = ContactSpring {
+        let spring = ContactSpring {
             stencil,
             normal,
             gap,
@@ -1023,6 +1019,10 @@ fn spring(mesh: &ContactMesh, pair: Pair, h: f32, x: &[Vec3], v: &[Vec3]) -> Opt
             armed: 0.0,
             outside: Outside::default(),
         };
+        if distance >= gap {
+            return ContactSpring { stiffness: 0.0, armed: stiffness, ..spring };
+        }
+        let mut spring = spring;
         spring.lag_friction(stiffness * (gap - distance), v);
         spring
     })
@@ -1119,7 +1119,6 @@ mod tests {
             half_gap: vec![0.005; 8],
             friction: vec![0.0; 8],
             layer: vec![0; 8],
-            cloth: vec![0; 8],
             first: vec![0, 8],
             springs: false,
         };
@@ -1284,7 +1283,6 @@ mod tests {
             half_gap: vec![half_gap; x.len()],
             friction: vec![0.2; x.len()],
             layer: vec![0; x.len()],
-            cloth: vec![0; x.len()],
             first: vec![0, x.len() as u32],
             springs: false,
             triangles,

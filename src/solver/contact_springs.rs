@@ -45,6 +45,12 @@ impl Stencil {
         Stencil { vertices: [e[0], e[1], f[0], f[1]], weights: [1.0 - s, s, u - 1.0, -u] }
     }
 
+    /// Its vertices with their weights, but those weighed zero (another cloth's,
+    /// [`Outside`]).
+    fn weighted(&self) -> impl Iterator<Item = (usize, f32)> + '_ {
+        self.vertices.iter().zip(&self.weights).filter(|(_, w)| **w != 0.0).map(|(&k, &w)| (k as usize, w))
+    }
+
     /// The pair's relative position (or velocity) `Σ w x` at `x`.
     pub fn relative(&self, x: &[Vec3]) -> Vec3 {
         (0..4).map(|k| self.weights[k] * x[self.vertices[k] as usize]).sum()
@@ -335,8 +341,8 @@ fn acting(springs: &[ContactSpring]) -> impl Iterator<Item = &ContactSpring> {
 pub fn add_forces(springs: &[ContactSpring], x: &[Vec3], v: &[Vec3], force: &mut [Vec3]) {
     for s in acting(springs) {
         let push = s.force(x, v);
-        for (&vertex, &weight) in s.stencil.vertices.iter().zip(&s.stencil.weights).filter(|(_, w)| **w != 0.0) {
-            force[vertex as usize] += weight * push;
+        for (vertex, weight) in s.stencil.weighted() {
+            force[vertex] += weight * push;
         }
     }
 }
@@ -381,8 +387,7 @@ pub fn add_product(springs: &[ContactSpring], weights: Weights, blocks: Blocks, 
         let total = s.stencil.relative(y);
         // Every vertex takes the same product of the whole pair.
         let whole = (blocks == Blocks::All).then(|| block * total);
-        for (&vertex, &weight) in s.stencil.vertices.iter().zip(&s.stencil.weights).filter(|(_, w)| **w != 0.0) {
-            let i = vertex as usize;
+        for (i, weight) in s.stencil.weighted() {
             out[i] += weight * whole.unwrap_or_else(|| block * (total - weight * y[i]));
         }
     }
@@ -403,8 +408,8 @@ pub fn add_diagonal(
 pub fn for_diagonal(springs: &[ContactSpring], weights: Weights, mut visit: impl FnMut(usize, Mat3)) {
     for s in acting(springs) {
         let block = s.block(weights);
-        for (&vertex, &weight) in s.stencil.vertices.iter().zip(&s.stencil.weights).filter(|(_, w)| **w != 0.0) {
-            visit(vertex as usize, weight * weight * block);
+        for (vertex, weight) in s.stencil.weighted() {
+            visit(vertex, weight * weight * block);
         }
     }
 }

@@ -869,9 +869,8 @@ fn push_friction(
             *change = -(friction * pressed / (dynamics.mass(i) * speed)).min(1.0) * slide;
         }
     });
-    for (delta, change) in ws.delta.iter_mut().zip(&ws.product) {
-        *delta += *change;
-    }
+    let ImplicitWorkspace { delta, product, .. } = ws;
+    add_rows(delta, |i| product[i]);
 }
 
 /// What the conjugate gradients know of `A δ` where they start.
