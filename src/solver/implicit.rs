@@ -23,7 +23,7 @@ use std::time::Instant;
 use glam::{Mat3, Vec3, Vec3A};
 use rayon::prelude::*;
 
-use super::contact_springs::{self, Blocks, ContactSpring, Weights};
+use super::contact_springs::{self, Blocks, ContactSpring, SpringTerms, Weights};
 use super::descent::{BoundedMotion, Colouring, DescentSettings, DescentWorkspace, descend};
 use super::elements::block::times;
 use super::elements::spring::outer;
@@ -170,6 +170,8 @@ pub struct ImplicitWorkspace {
     /// The weights of stiffness (`hβ + h²θ²`) and damping (`h`) in the system, which the
     /// contact springs' off-diagonal blocks take in each product.
     spring_weights: Weights,
+    /// The contact springs' terms of each product.
+    spring_terms: SpringTerms,
     /// Per chunk of [`VECTOR_CHUNK`] particles, the partial sums of the CG's dot products.
     partials: Vec<f64>,
     /// Per particle, the directions its Δv may take: identity (free), zero (pinned) or a
@@ -366,8 +368,8 @@ pub fn implicit_step(
     dynamics.linearize(x, v, t, &mut ws.rhs, &mut ws.dfdx, &mut ws.dfdv);
     step_system(dynamics, &ws.dfdx, 1.0).multiply(v, &mut ws.product);
     let springs = springs_of(settings, dynamics);
-    contact_springs::add_forces(springs, x, v, &mut ws.rhs);
-    contact_springs::add_product(springs, STIFFNESS, Blocks::All, v, &mut ws.product);
+    contact_springs::add_forces(springs, &mut ws.spring_terms, x, v, &mut ws.rhs);
+    contact_springs::add_product(springs, &mut ws.spring_terms, STIFFNESS, Blocks::All, v, &mut ws.product);
     for i in 0..n {
         let start = ws.rhs[i] - alpha * dynamics.mass(i) * v[i] + beta * ws.product[i];
         if newton {
@@ -443,10 +445,10 @@ pub fn implicit_step(
         ws.dfdv.multiply(dynamics.pattern(), &ws.dv, &mut ws.residual);
         stiffness.multiply(&ws.dv, &mut ws.direction);
         let springs = springs_of(settings, dynamics);
-        contact_springs::add_forces(springs, &ws.x, &ws.v, &mut ws.rhs);
-        contact_springs::add_product(springs, STIFFNESS, Blocks::All, &ws.v, &mut ws.product);
-        contact_springs::add_product(springs, DAMPING, Blocks::All, &ws.dv, &mut ws.residual);
-        contact_springs::add_product(springs, STIFFNESS, Blocks::All, &ws.dv, &mut ws.direction);
+        contact_springs::add_forces(springs, &mut ws.spring_terms, &ws.x, &ws.v, &mut ws.rhs);
+        contact_springs::add_product(springs, &mut ws.spring_terms, STIFFNESS, Blocks::All, &ws.v, &mut ws.product);
+        contact_springs::add_product(springs, &mut ws.spring_terms, DAMPING, Blocks::All, &ws.dv, &mut ws.residual);
+        contact_springs::add_product(springs, &mut ws.spring_terms, STIFFNESS, Blocks::All, &ws.dv, &mut ws.direction);
         // −R = h((1−θ)F₀ + θF₁ + (1−θ) D Δv) − M Δv, with F₁ = f₁ − αMv₁ + βKv₁.
         for i in 0..n {
             let mass = dynamics.mass(i);
@@ -555,11 +557,11 @@ fn add_springs(
     if ws.prepared == Prepared::Ready {
         ws.prepared = Prepared::SpringsChanged;
     }
-    let (force, stiffness) = (&mut ws.residual, &mut ws.direction);
+    let (force, stiffness, terms) = (&mut ws.residual, &mut ws.direction, &mut ws.spring_terms);
     force.fill(Vec3::ZERO);
     stiffness.fill(Vec3::ZERO);
-    contact_springs::add_forces(springs, x, v, force);
-    contact_springs::add_product(springs, STIFFNESS, Blocks::All, v, stiffness);
+    contact_springs::add_forces(springs, terms, x, v, force);
+    contact_springs::add_product(springs, terms, STIFFNESS, Blocks::All, v, stiffness);
     let (theta, beta) = (settings.theta, settings.rayleigh.beta);
     // The start force is kept for Newton iterations only (`implicit_step`).
     let newton = iterates(settings);
@@ -615,9 +617,16 @@ fn springs_of<'a>(settings: &ImplicitSettings, dynamics: &'a impl LinearDynamics
 
 /// `out = A y`: the matrix, and the contact springs' off-diagonal blocks weighted as
 /// stiffness and damping are in `A`.
-fn multiply_system(system: StepSystem<'_>, springs: &[ContactSpring], weights: Weights, y: &[Vec3], out: &mut [Vec3]) {
+fn multiply_system(
+    system: StepSystem<'_>,
+    springs: &[ContactSpring],
+    terms: &mut SpringTerms,
+    weights: Weights,
+    y: &[Vec3],
+    out: &mut [Vec3],
+) {
     system.multiply(y, out);
-    contact_springs::add_product(springs, weights, Blocks::OffDiagonal, y, out);
+    contact_springs::add_product(springs, terms, weights, Blocks::OffDiagonal, y, out);
 }
 
 fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
@@ -649,7 +658,14 @@ fn add_constraint_impulses(
         return;
     }
     let system = step_system(dynamics, &ws.system, -ws.spring_weights.stiffness);
-    multiply_system(system, springs_of(settings, dynamics), ws.spring_weights, &ws.delta, &mut ws.product);
+    multiply_system(
+        system,
+        springs_of(settings, dynamics),
+        &mut ws.spring_terms,
+        ws.spring_weights,
+        &ws.delta,
+        &mut ws.product,
+    );
     for (impulse, c) in ws.constraint_impulses.iter_mut().zip(constraints) {
         let i = c.particle as usize;
         *impulse += ws.product[i] - ws.rhs[i];
@@ -718,8 +734,19 @@ fn projected_start(dynamics: &impl LinearDynamics, settings: &ImplicitSettings, 
     let started = Instant::now();
     let system = step_system(dynamics, &ws.system, -ws.spring_weights.stiffness);
     let (springs, weights) = (springs_of(settings, dynamics), ws.spring_weights);
-    let ImplicitWorkspace { warm_start, filter, rhs, prescribed, product, residual, direction, delta, .. } = ws;
-    let multiply = |x: &[Vec3], out: &mut [Vec3]| multiply_system(system, springs, weights, x, out);
+    let ImplicitWorkspace {
+        warm_start,
+        filter,
+        rhs,
+        prescribed,
+        product,
+        residual,
+        direction,
+        delta,
+        spring_terms,
+        ..
+    } = ws;
+    let multiply = |x: &[Vec3], out: &mut [Vec3]| multiply_system(system, springs, spring_terms, weights, x, out);
     let products = [product.as_mut_slice(), residual, direction];
     let started_warm = warm_start.start(filter, rhs, prescribed, multiply, products, delta);
     ws.stages.solve += started.elapsed();
@@ -852,7 +879,14 @@ fn push_friction(
         return;
     }
     let system = step_system(dynamics, &ws.system, -ws.spring_weights.stiffness);
-    multiply_system(system, springs_of(settings, dynamics), ws.spring_weights, &ws.delta, &mut ws.product);
+    multiply_system(
+        system,
+        springs_of(settings, dynamics),
+        &mut ws.spring_terms,
+        ws.spring_weights,
+        &ws.delta,
+        &mut ws.product,
+    );
     let (end, rhs, filter) = (&ws.anchor, &ws.rhs, &ws.filter);
     ws.product.par_iter_mut().enumerate().with_min_len(PARALLEL_MIN_LEN).for_each(|(i, change)| {
         let push = *change - rhs[i];
@@ -952,6 +986,7 @@ fn conjugate_gradient(
         multigrid,
         prepared,
         spring_weights,
+        spring_terms,
         stages,
         ..
     } = ws;
@@ -985,7 +1020,7 @@ fn conjugate_gradient(
         }),
         StartProduct::Formed | StartProduct::Unknown => {
             if known == StartProduct::Unknown {
-                multiply_system(system, springs, weights, delta, product);
+                multiply_system(system, springs, spring_terms, weights, delta, product);
             }
             fused(residual, product, partials, |i, r, q| {
                 *r = filter.apply(i, rhs[i] - q);
@@ -1021,7 +1056,7 @@ fn conjugate_gradient(
     for iteration in 1..=settings.cg_max_iterations {
         // q = S A d, and d·q: the constant couplings' rows, if any, added in the pass that
         // filters.
-        multiply_system(StepSystem { far: None, ..system }, springs, weights, direction, product);
+        multiply_system(StepSystem { far: None, ..system }, springs, spring_terms, weights, direction, product);
         let along = &*direction;
         let curvature = fused(product, along, partials, |i, q, d| {
             *q = filter.apply(i, system.far.map_or(*q, |far| *q + far.row_product(i, along)));

@@ -56,7 +56,7 @@ use glam::{Mat3, Mat3A, Vec3, Vec3A, Vec4};
 use rayon::prelude::*;
 
 use super::coarse_springs::CoarseSprings;
-use super::contact_springs::{Blocks, ContactSpring, Weights, add_product, for_diagonal};
+use super::contact_springs::{Blocks, ContactSpring, SpringTerms, Weights, add_product, for_diagonal};
 use super::elements::block::{SymmetricBlock, block_product, by_parts, times};
 use super::elements::half::row_product;
 use super::elements::spring::{outer, skew};
@@ -1040,6 +1040,7 @@ impl Operator<'_> {
 struct Coupled {
     product: Vec<Vec3>,
     pushes: Vec<Vec3>,
+    terms: SpringTerms,
 }
 
 impl Coupled {
@@ -1058,7 +1059,7 @@ impl Coupled {
                 for &vertex in springs.iter().flat_map(|s| &s.stencil.vertices) {
                     self.product[vertex as usize] = Vec3::ZERO;
                 }
-                add_product(springs, weights, Blocks::OffDiagonal, x, &mut self.product);
+                add_product(springs, &mut self.terms, weights, Blocks::OffDiagonal, x, &mut self.product);
             }
             SpringPart::Terms(terms) => terms.product(x, &mut self.pushes, &mut self.product),
         }
@@ -2432,7 +2433,7 @@ mod tests {
             system.multiply(&pattern, &fine, &mut product);
             // The springs' diagonal blocks alone, before their couplings are added.
             let diagonal_only = product.clone();
-            add_product(&springs, weights, Blocks::OffDiagonal, &fine, &mut product);
+            add_product(&springs, &mut SpringTerms::default(), weights, Blocks::OffDiagonal, &fine, &mut product);
             level.prolongation.restrict(
                 &coarsening.restriction,
                 &coarsening.prolongation,
@@ -2497,7 +2498,7 @@ mod tests {
         let multiply = |x: &[Vec3]| {
             let mut product = vec![Vec3::ZERO; n];
             system.multiply(&pattern, x, &mut product);
-            add_product(&springs, weights, Blocks::OffDiagonal, x, &mut product);
+            add_product(&springs, &mut SpringTerms::default(), weights, Blocks::OffDiagonal, x, &mut product);
             product
         };
         // Conjugate gradients preconditioned by the V-cycle, to a relative residual of 10⁻⁶.
