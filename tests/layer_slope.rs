@@ -11,6 +11,7 @@ mod common;
 use glam::Vec3;
 use selvedge::Simulation;
 use selvedge::components::{Cloth, Particles};
+use selvedge::solver::integrate::Integrator;
 
 const G: f32 = 9.8;
 
@@ -67,7 +68,11 @@ fn run_until(sim: &mut Simulation, t: f64, layer: &[usize]) {
 /// Acceleration of the upper layer of scene `name` along the slope (+X) between 0.1 s
 /// (landed) and 0.5 s, from its mean velocity.
 fn acceleration(name: &str, mu: f32) -> f32 {
-    let mut sim = simulation(name, mu);
+    acceleration_of(simulation(name, mu))
+}
+
+/// The upper layer's acceleration along the slope in `sim`, as [`acceleration`] measures it.
+fn acceleration_of(mut sim: Simulation) -> f32 {
     let layer = upper_layer(&mut sim);
     assert_eq!(layer.len(), 81, "the upper layer is the 9 × 9 square");
     run_until(&mut sim, 0.1, &layer);
@@ -90,6 +95,43 @@ fn without_friction_a_layer_slides_on_a_layer_of_its_cloth_at_g_sin_30() {
 #[test]
 fn without_friction_a_cloth_slides_on_another_at_g_sin_30() {
     slides_without_friction_at_g_sin_30(TWO_CLOTHS);
+}
+
+/// The one-cloth layers without friction, stepped by block descent at `steps` a frame.
+fn frictionless_block_descent(steps: u32) -> f32 {
+    acceleration_of(common::bundled_with(ONE_CLOTH, |scene| {
+        scene.solver.integrator = Integrator::BlockDescent;
+        scene.solver.substeps = Some(steps);
+        scene.cloths[0].self_collision.as_mut().expect("the layers collide").friction = Some(0.0);
+    }))
+}
+
+/// Block descent holds the layers apart by its contact bounds alone (it has no contact
+/// springs): each sweep moves a vertex at most 0.4 of its nearest pair's distance from
+/// where the bounds were last measured, 0.8 mm for a layer resting 2 mm up. At 40 steps a
+/// frame the slide of a step stays within that, and the layer slides at g sin 30°
+/// (4.8997 m/s², 1 December 2026).
+#[test]
+fn without_friction_a_layer_slides_on_a_layer_at_g_sin_30_under_block_descent_at_short_steps() {
+    let (measured, expected) = (frictionless_block_descent(40), G * 0.5);
+    assert!((measured - expected).abs() < 0.02 * expected, "acceleration {measured} m/s², expected {expected}");
+}
+
+/// At longer steps the bounds brake the slide: 2.5 m/s² at 10 steps a frame, 0.70 at 4 and
+/// none at one (6 · 10⁻⁴), where `contact_bounds: false` gives 4.81 at 10 (1 December
+/// 2026). A step first moves the bounds' anchor towards its start, measuring again after
+/// each move, but stops once a move brings the farthest particle less than a quarter
+/// closer (`advance_anchor`): a sliding layer's gap does not shrink, each move gains it
+/// the same 0.8 mm, and a slide of 4 mm a step is stopped after the first. Moving on while
+/// a move gains a tenth slid at 4.80 at 10 steps and 2.49 at 4, but the fold heap and
+/// sphere_64 at one step a frame then took 12 to 13 % longer and the heap ended at 0.30
+/// strain against 0.07, so it was not kept. Bounds that let a resting layer slide (a
+/// plane, as a body's, where the other side is held) would close it.
+#[test]
+#[ignore = "known defect: block descent's contact bounds brake a layer sliding on a layer (README, Choosing an integrator)"]
+fn without_friction_a_layer_slides_on_a_layer_at_g_sin_30_under_block_descent_at_10_steps_a_frame() {
+    let (measured, expected) = (frictionless_block_descent(10), G * 0.5);
+    assert!((measured - expected).abs() < 0.03 * expected, "acceleration {measured} m/s², expected {expected}");
 }
 
 fn sticks_with_mu_above_tan_30(name: &str) {
