@@ -629,6 +629,13 @@ fn multiply_system(
     contact_springs::add_product(springs, terms, weights, Blocks::OffDiagonal, y, out);
 }
 
+/// `ws.product = A δ`: the system, with its contact springs, times the last solution.
+fn multiply_solution(dynamics: &impl LinearDynamics, settings: &ImplicitSettings, ws: &mut ImplicitWorkspace) {
+    let system = step_system(dynamics, &ws.system, -ws.spring_weights.stiffness);
+    let springs = springs_of(settings, dynamics);
+    multiply_system(system, springs, &mut ws.spring_terms, ws.spring_weights, &ws.delta, &mut ws.product);
+}
+
 fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
     a.iter().zip(b).map(|(a, b)| f64::from(a.dot(*b))).sum()
 }
@@ -657,15 +664,7 @@ fn add_constraint_impulses(
     if constraints.is_empty() {
         return;
     }
-    let system = step_system(dynamics, &ws.system, -ws.spring_weights.stiffness);
-    multiply_system(
-        system,
-        springs_of(settings, dynamics),
-        &mut ws.spring_terms,
-        ws.spring_weights,
-        &ws.delta,
-        &mut ws.product,
-    );
+    multiply_solution(dynamics, settings, ws);
     for (impulse, c) in ws.constraint_impulses.iter_mut().zip(constraints) {
         let i = c.particle as usize;
         *impulse += ws.product[i] - ws.rhs[i];
@@ -878,15 +877,7 @@ fn push_friction(
     if bodies.is_empty() {
         return;
     }
-    let system = step_system(dynamics, &ws.system, -ws.spring_weights.stiffness);
-    multiply_system(
-        system,
-        springs_of(settings, dynamics),
-        &mut ws.spring_terms,
-        ws.spring_weights,
-        &ws.delta,
-        &mut ws.product,
-    );
+    multiply_solution(dynamics, settings, ws);
     let (end, rhs, filter) = (&ws.anchor, &ws.rhs, &ws.filter);
     ws.product.par_iter_mut().enumerate().with_min_len(PARALLEL_MIN_LEN).for_each(|(i, change)| {
         let push = *change - rhs[i];
