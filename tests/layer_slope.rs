@@ -126,7 +126,13 @@ fn without_friction_a_layer_slides_on_a_layer_at_g_sin_30_under_block_descent_at
 /// a move gains a tenth slid at 4.80 at 10 steps and 2.49 at 4, but the fold heap and
 /// sphere_64 at one step a frame then took 12 to 13 % longer and the heap ended at 0.30
 /// strain against 0.07, so it was not kept. Bounds that let a resting layer slide (a
-/// plane, as a body's, where the other side is held) would close it.
+/// plane, as a body's, where the other side is held) would close it. At one step a frame
+/// the sweeps themselves are the limit, bounds or none: each step's solve gave the layer
+/// 0.0037 m/s of the 0.082 its pull asks for along the slope, and the whole of it across
+/// (g cos 30° h): a free piece's in-plane translation is the slowest mode of block
+/// Gauss–Seidel where `h² k / m` is large (some 7 000 here), as the membrane couples each
+/// particle to its neighbours far more than its mass holds it. A coarse correction over
+/// the floating pieces' translations after the sweeps would remove it.
 #[test]
 #[ignore = "known defect: block descent's contact bounds brake a layer sliding on a layer (README, Choosing an integrator)"]
 fn without_friction_a_layer_slides_on_a_layer_at_g_sin_30_under_block_descent_at_10_steps_a_frame() {
