@@ -11,6 +11,7 @@ mod common;
 use glam::Vec3;
 use selvedge::Simulation;
 use selvedge::components::{Cloth, Particles};
+use selvedge::scene::Scene;
 use selvedge::solver::integrate::Integrator;
 
 const G: f32 = 9.8;
@@ -21,10 +22,16 @@ const TWO_CLOTHS: &str = "layer_slope_cloths.ron";
 
 /// The bundled scene `name` with friction `mu` between the layers.
 fn simulation(name: &str, mu: f32) -> Simulation {
+    simulation_with(name, mu, |_| {})
+}
+
+/// [`simulation`], with `edit` made to the scene too.
+fn simulation_with(name: &str, mu: f32, edit: impl FnOnce(&mut Scene)) -> Simulation {
     common::bundled_with(name, |scene| {
         for cloth in &mut scene.cloths {
             cloth.self_collision.as_mut().expect("the scene's cloths collide").friction = Some(mu);
         }
+        edit(scene);
     })
 }
 
@@ -99,10 +106,9 @@ fn without_friction_a_cloth_slides_on_another_at_g_sin_30() {
 
 /// The one-cloth layers without friction, stepped by block descent at `steps` a frame.
 fn frictionless_block_descent(steps: u32) -> f32 {
-    acceleration_of(common::bundled_with(ONE_CLOTH, |scene| {
+    acceleration_of(simulation_with(ONE_CLOTH, 0.0, |scene| {
         scene.solver.integrator = Integrator::BlockDescent;
         scene.solver.substeps = Some(steps);
-        scene.cloths[0].self_collision.as_mut().expect("the layers collide").friction = Some(0.0);
     }))
 }
 
