@@ -193,7 +193,7 @@ fn kernels(c: &mut Criterion) {
                 model,
                 free_inv_mass: &topology.free_inv_mass,
                 scratch: &mut scratch,
-                self_collision: false,
+                self_collision: None,
                 others: None,
                 contact_springs: &mut [],
                 bodies: &[],

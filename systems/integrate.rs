@@ -6,7 +6,7 @@ use glam::Vec3;
 use super::forces::{ForceElements, ForceEnvironment};
 use crate::collision::body_contact::ContactBody;
 use crate::collision::coupling::PropCoupling;
-use crate::collision::motion_bounds::{ClothSurfaces, Surface};
+use crate::collision::motion_bounds::{ClothSurfaces, LayerContact, Surface};
 use crate::components::{Cloth, Collider, Particles, Prop, SelfCollision, SelfTouching, SolverWorkspace, Touching};
 use crate::resources::{ClothContacts, HealthProblem, HealthReport, IntegratorStats, SolverSettings, StepSettings};
 use crate::schedule::{SimSchedules, SubstepSystems};
@@ -34,7 +34,7 @@ pub fn integrate_cloths(
         ForceElements,
         &Touching,
         &mut SolverWorkspace,
-        Has<SelfCollision>,
+        Option<&SelfCollision>,
         Option<&mut SelfTouching>,
     )>,
     mut colliders: Query<(&Collider, Option<&mut Prop>)>,
@@ -56,12 +56,12 @@ pub fn integrate_cloths(
     }
     // Block descent bounds each cloth's sweeps by the other cloths it collides with too,
     // where they stand when its turn comes: those before it where their steps ended.
-    let colliding = cloths.iter().filter(|(.., self_collision, _)| *self_collision).count();
+    let colliding = cloths.iter().filter(|(.., self_collision, _)| self_collision.is_some()).count();
     let bounded = solver.integrator.bounds_contact(&solver.method) && colliding > 1;
     if bounded {
         surfaces.clear();
         for (_, _, particles, (_, _, triangles, _, _, topology, _), .., self_collision, _) in &cloths {
-            if self_collision {
+            if self_collision.is_some() {
                 let triangles = &triangles.indices;
                 surfaces.add(Surface { triangles, edges: topology.edges(triangles) }, &particles.position);
             }
@@ -73,7 +73,7 @@ pub fn integrate_cloths(
     {
         // The cloth's number among those bounded by one another: the query yields the
         // cloths in the same order both times.
-        let member = (bounded && self_collision).then(|| {
+        let member = (bounded && self_collision.is_some()).then(|| {
             members += 1;
             members - 1
         });
@@ -120,7 +120,7 @@ pub fn integrate_cloths(
             model,
             free_inv_mass: &topology.free_inv_mass,
             scratch: forces,
-            self_collision,
+            self_collision: self_collision.map(|s| LayerContact { separation: s.separation, friction: s.friction }),
             others: member.and_then(|m| surfaces.others(m)),
             contact_springs: self_touching.map_or(&mut [], |s| {
                 let SelfTouching { springs, across } = s.into_inner();

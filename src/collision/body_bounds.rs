@@ -30,6 +30,9 @@ const SLACK: f32 = 0.5 * CAUGHT;
 /// Narrows each `bounds[i]`, measured about the vertex at `x[i]`, so that no move within
 /// it comes closer to any of the `bodies` than its contact thickness, or into a mesh.
 /// Bounds that already keep a vertex farther from a body's bounding box are left alone.
+/// A vertex whose bound already keeps to a plane (a still layer's under it,
+/// [`super::motion_bounds`]) keeps off every body by a ball: its neighbours' bounds count
+/// on that plane, which a body's must not replace.
 pub fn limit(bodies: &[ContactBody], x: &[Vec3], bounds: &mut [Bound]) {
     if bodies.is_empty() {
         return;
@@ -39,6 +42,7 @@ pub fn limit(bodies: &[ContactBody], x: &[Vec3], bounds: &mut [Bound]) {
         // clearance, the plane, and the ball that stands in for it if a nearer one comes.
         let mut nearest: Option<(f32, Vec4, f32, f32)> = None;
         let mut radius = bound.radius;
+        let planed = bound.plane != Vec4::ZERO;
         for body in bodies {
             let pose = &body.state.pose;
             let thickness = body.thickness;
@@ -55,8 +59,8 @@ pub fn limit(bodies: &[ContactBody], x: &[Vec3], bounds: &mut [Bound]) {
                 continue;
             };
             let inside = near.signed < 0.0;
-            if !inside && !body.shape.is_convex() {
-                radius = radius.min(ball(near.signed));
+            if planed || (!inside && !body.shape.is_convex()) {
+                radius = radius.min(ball(near.signed).max(0.0));
                 continue;
             }
             let clearance = near.signed - thickness;

@@ -15,13 +15,22 @@
 //! step one after another, each against the others where they stand then), so a pair with
 //! one of them has only the cloth's side moving, and the same fraction of its distance
 //! keeps it apart with room to spare: [`Others`] adds those pairs.
+//!
+//! Where one side of a pair stands still in the solve (a pinned layer), a ball of a
+//! fraction of the gap stops a layer sliding on it: each measure lets it slide 0.4 of the
+//! gap, whatever the slide wants. A free vertex over a still triangle keeps instead to the
+//! half-space beyond that triangle's plane, grown by the layers' separation, as a vertex
+//! over a body keeps to the body's tangent plane ([`super::body_bounds`]): it may slide
+//! along the layer as far as its ball lets it, and the ball no longer counts the pairs the
+//! planes keep apart ([`Resting`]).
 
 use std::ops::Range;
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
+use super::body_contact::CAUGHT;
 use super::bvh::{Aabb, Bvh};
 use super::primitives::{closest_between_segments, closest_on_triangle};
 use crate::solver::PARALLEL_MIN_LEN;
@@ -87,6 +96,44 @@ impl Bound {
         if approach < 0.0 && room + approach < 0.0 { (room / -approach).clamp(0.0, 1.0) } else { 1.0 }
     }
 }
+
+/// How a vertex moves in the solve its bounds are measured for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mobility {
+    /// Free of constraints: it may keep to a plane.
+    Free,
+    /// Moving within a constraint's filter, which a plane could leave no room.
+    Constrained,
+    /// Standing still where its bound is measured: pinned there.
+    Still,
+}
+
+/// How a cloth's layers meet: the gap its pairs keep, and their friction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LayerContact {
+    /// Distance kept between layers' mid-surfaces [m].
+    pub separation: f32,
+    /// Coulomb friction between layers [-].
+    pub friction: f32,
+}
+
+/// What lets a layer rest and slide on a still one ([`MotionBounds::compute`]): how each
+/// vertex moves, and the separation a vertex over a still triangle keeps from it.
+#[derive(Debug, Clone, Copy)]
+pub struct Resting<'a> {
+    /// Per vertex.
+    pub mobility: &'a [Mobility],
+    /// The layers' separation [m].
+    pub separation: f32,
+}
+
+/// A still triangle can carry a free vertex's plane only where the vertex lies over it:
+/// its height above the triangle's plane at least this fraction of its distance. Beside a
+/// triangle of its own sheet a vertex is level with it, and that plane would hold it there.
+const OVER: f32 = 0.7;
+
+/// No still triangle under a vertex.
+const NO_SUPPORT: u64 = u64::MAX;
 
 /// A cloth surface whose vertices must not pass through it.
 #[derive(Debug, Clone, Copy)]
@@ -203,6 +250,14 @@ pub struct MotionBounds {
     /// non-negative `f32`, whose order is the numbers' order: an atomic minimum over them
     /// is exact and does not depend on the order the pairs are met in.
     nearest: Vec<AtomicU32>,
+    /// Per free vertex, its nearest still triangle that it lies over, as its distance's
+    /// bits above the triangle's number (so the minimum is the nearest, the lowest number
+    /// among equals), or [`NO_SUPPORT`].
+    support: Vec<AtomicU64>,
+    /// Per vertex, the plane the still triangle under it gives, or zero.
+    planes: Vec<Vec4>,
+    /// Whether the last call gave any vertex a still triangle's plane.
+    supported: bool,
 }
 
 impl Clone for MotionBounds {
@@ -220,16 +275,22 @@ impl MotionBounds {
     /// edge from it, so looking farther than an edge would loosen no bound.
     ///
     /// With `others`, the pairs with the other cloths' triangles and edges, which stand
-    /// still, bound the vertices too.
+    /// still, bound the vertices too. With `resting`, a free vertex over a still triangle
+    /// keeps to that triangle's plane ([`MotionBounds::planes`]), and the pairs with one
+    /// side still that the planes keep apart ([`MotionBounds::guarded`]) no longer shrink
+    /// the balls.
     pub fn compute(
         &mut self,
         surface: Surface<'_>,
         others: Option<Others<'_>>,
+        resting: Option<Resting<'_>>,
         x: &[Vec3],
         wanted: f32,
         bounds: &mut [Bound],
     ) {
         let Surface { triangles, edges } = surface;
+        // Without a still vertex there is no pair to leave to the planes.
+        let resting = resting.filter(|r| r.mobility.contains(&Mobility::Still));
         let edge = if edges.is_empty() {
             0.0
         } else {
@@ -243,29 +304,54 @@ impl MotionBounds {
             .par_iter()
             .with_min_len(PARALLEL_MIN_LEN)
             .for_each(|d| d.store(reach.to_bits(), Ordering::Relaxed));
-        let Self { triangle_tree, edge_tree, nearest } = &*self;
-        let lower = |k: u32, d: f32| {
-            nearest[k as usize].fetch_min(d.to_bits(), Ordering::Relaxed);
-        };
+        if resting.is_some() {
+            self.support.resize_with(x.len(), AtomicU64::default);
+            self.support.par_iter().with_min_len(PARALLEL_MIN_LEN).for_each(|s| s.store(NO_SUPPORT, Ordering::Relaxed));
+        }
+        let mobility = |k: u32| resting.map_or(Mobility::Constrained, |r| r.mobility[k as usize]);
+        let all_still =
+            |vertices: &[u32]| resting.is_some() && vertices.iter().all(|&k| mobility(k) == Mobility::Still);
+        // A pair with one side still and the other not: the still side's plane may keep
+        // it apart, which only the pass after the planes knows.
+        let one_side_still = |a: &[u32], b: &[u32]| all_still(a) != all_still(b);
+        let Self { triangle_tree, edge_tree, nearest, support, .. } = &*self;
+        let lower = |k: u32, d: f32| lower_to(nearest, k, d);
         // A pair can lower no vertex's distance once it is at least the largest of its
         // vertices' distances so far, which only fall: skipping it where its boxes' gap
         // says so leaves every minimum, and so the bounds, as they were.
-        let farthest = |vertices: &[u32]| {
-            vertices.iter().map(|&k| f32::from_bits(nearest[k as usize].load(Ordering::Relaxed))).fold(0.0, f32::max)
+        let farthest = |vertices: &[u32]| farthest_in(nearest, vertices);
+        let point_triangle = |p: Vec3, triangle: [u32; 3]| {
+            let [a, b, c] = triangle.map(|k| x[k as usize]);
+            let w = closest_on_triangle(p, a, b, c);
+            p.distance(w[0] * a + w[1] * b + w[2] * c)
         };
-        // Each vertex against the triangles around it.
+        // Each vertex against the triangles around it; a free vertex's pairs with still
+        // triangles are where it looks for the one it lies over.
         (0..x.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).for_each(|v| {
             let p = x[v as usize];
             let mut own = reach;
             let point = Aabb::around([p]);
             triangle_tree.query(&point.inflated(reach), |t| {
                 let triangle = triangles[t as usize];
-                if triangle.contains(&v) || point.distance(&triangle_tree.aabb(t)) >= own.max(farthest(&triangle)) {
+                if triangle.contains(&v) {
                     return;
                 }
-                let [a, b, c] = triangle.map(|k| x[k as usize]);
-                let w = closest_on_triangle(p, a, b, c);
-                let d = p.distance(w[0] * a + w[1] * b + w[2] * c);
+                if one_side_still(&[v], &triangle) {
+                    if mobility(v) == Mobility::Free && point.distance(&triangle_tree.aabb(t)) < reach {
+                        let d = point_triangle(p, triangle);
+                        let [a, b, c] = triangle.map(|k| x[k as usize]);
+                        let height = (b - a).cross(c - a).normalize_or_zero().dot(p - a).abs();
+                        if d < reach && height > 0.0 && height >= OVER * d {
+                            support[v as usize]
+                                .fetch_min(u64::from(d.to_bits()) << 32 | u64::from(t), Ordering::Relaxed);
+                        }
+                    }
+                    return;
+                }
+                if point.distance(&triangle_tree.aabb(t)) >= own.max(farthest(&triangle)) {
+                    return;
+                }
+                let d = point_triangle(p, triangle);
                 if d < reach {
                     own = own.min(d);
                     triangle.iter().for_each(|&k| lower(k, d));
@@ -276,25 +362,34 @@ impl MotionBounds {
         // Each edge against the edges after it.
         (0..edges.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).for_each(|e| {
             let [a, b] = edges[e as usize];
-            let (pa, pb) = (x[a as usize], x[b as usize]);
             let own = edge_tree.aabb(e);
             edge_tree.query_from(&own.inflated(reach), e + 1, |f| {
                 let [c, d] = edges[f as usize];
                 if [a, b].contains(&c)
                     || [a, b].contains(&d)
+                    || one_side_still(&[a, b], &[c, d])
                     || own.distance(&edge_tree.aabb(f)) >= farthest(&[a, b, c, d])
                 {
                     return;
                 }
-                let (pc, pd) = (x[c as usize], x[d as usize]);
-                let (s, t) = closest_between_segments(pa, pb, pc, pd);
-                let distance = (pa + s * (pb - pa)).distance(pc + t * (pd - pc));
+                let distance = edge_edge(x, [a, b], [c, d]);
                 if distance < reach {
                     [a, b, c, d].into_iter().for_each(|k| lower(k, distance));
                 }
             });
         });
+        if let Some(resting) = resting {
+            self.planes(triangles, x, resting.separation);
+            self.guard(surface, resting, x, reach);
+        } else {
+            self.supported = false;
+        }
+        let Self { nearest, .. } = &*self;
         if let Some(others) = others {
+            let lower = |k: u32, d: f32| lower_to(nearest, k, d);
+            let farthest = |vertices: &[u32]| farthest_in(nearest, vertices);
+            let triangle_tree = &self.triangle_tree;
+            let edge_tree = &self.edge_tree;
             let ClothSurfaces { positions: y, triangles: their_triangles, edges: their_edges, .. } = others.surfaces;
             // Each vertex against the other cloths' triangles: only the vertex moves, so
             // only those nearer than its nearest pair so far matter.
@@ -350,12 +445,190 @@ impl MotionBounds {
                 }
             });
         }
-        bounds
-            .par_iter_mut()
-            .zip(nearest.par_iter())
-            .with_min_len(PARALLEL_MIN_LEN)
-            .for_each(|(bound, d)| *bound = Bound::within(GAMMA * f32::from_bits(d.load(Ordering::Relaxed))));
+        let (planes, slack) = (&self.planes, resting.map_or(0.0, |r| SLACK * r.separation));
+        bounds.par_iter_mut().zip(nearest.par_iter()).enumerate().with_min_len(PARALLEL_MIN_LEN).for_each(
+            |(v, (bound, d))| {
+                *bound = Bound::within(GAMMA * f32::from_bits(d.load(Ordering::Relaxed)));
+                if let Some(&plane) = planes.get(v).filter(|p| resting.is_some() && **p != Vec4::ZERO) {
+                    bound.plane = plane;
+                    bound.slack = slack;
+                }
+            },
+        );
     }
+
+    /// Sets each free vertex's plane from the still triangle it lies over, if any: the
+    /// triangle's plane, on the vertex's side, grown by `separation` less the slack, or
+    /// through the vertex where it is nearer than that, so that measuring again never lets
+    /// it closer (as a body's plane is placed, [`super::body_bounds`]).
+    fn planes(&mut self, triangles: &[[u32; 3]], x: &[Vec3], separation: f32) {
+        let slack = SLACK * separation;
+        let Self { support, planes, .. } = self;
+        planes.resize(x.len(), Vec4::ZERO);
+        planes.par_iter_mut().zip(support.par_iter()).enumerate().with_min_len(PARALLEL_MIN_LEN).for_each(
+            |(v, (plane, s))| {
+                *plane = match supporting(s) {
+                    None => Vec4::ZERO,
+                    Some(t) => {
+                        let (p, normal, height) = over(triangles[t as usize], x, x[v]);
+                        normal.extend(normal.dot(p) - (height - separation + slack).max(0.0))
+                    }
+                };
+            },
+        );
+        self.supported = self.planes.iter().any(|p| *p != Vec4::ZERO);
+    }
+
+    /// Lowers the distances of the pairs with one side still that the planes do not keep
+    /// apart: every one where no vertex has a plane.
+    fn guard(&self, surface: Surface<'_>, resting: Resting<'_>, x: &[Vec3], reach: f32) {
+        let Surface { triangles, edges } = surface;
+        let Self { triangle_tree, edge_tree, nearest, planes, .. } = self;
+        let still = |k: u32| resting.mobility[k as usize] == Mobility::Still;
+        let all_still = |vertices: &[u32]| vertices.iter().all(|&k| still(k));
+        let lower = |k: u32, d: f32| lower_to(nearest, k, d);
+        let farthest = |vertices: &[u32]| farthest_in(nearest, vertices);
+        let kept = |moving: &[u32], still: &[u32]| {
+            self.supported && guarded(planes, x, moving, still, GAMMA * reach, SLACK * resting.separation)
+        };
+        (0..x.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).for_each(|v| {
+            let p = x[v as usize];
+            let point = Aabb::around([p]);
+            triangle_tree.query(&point.inflated(reach), |t| {
+                let triangle = triangles[t as usize];
+                let (v_still, t_still) = (still(v), all_still(&triangle));
+                if triangle.contains(&v)
+                    || v_still == t_still
+                    || point.distance(&triangle_tree.aabb(t)) >= farthest(&[v, triangle[0], triangle[1], triangle[2]])
+                {
+                    return;
+                }
+                let [a, b, c] = triangle.map(|k| x[k as usize]);
+                let w = closest_on_triangle(p, a, b, c);
+                let d = p.distance(w[0] * a + w[1] * b + w[2] * c);
+                let apart = if v_still { kept(&triangle, &[v]) } else { kept(&[v], &triangle) };
+                if d < reach && !apart {
+                    [v, triangle[0], triangle[1], triangle[2]].into_iter().for_each(|k| lower(k, d));
+                }
+            });
+        });
+        (0..edges.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).for_each(|e| {
+            let [a, b] = edges[e as usize];
+            let own = edge_tree.aabb(e);
+            edge_tree.query_from(&own.inflated(reach), e + 1, |f| {
+                let [c, d] = edges[f as usize];
+                let (e_still, f_still) = (all_still(&[a, b]), all_still(&[c, d]));
+                if [a, b].contains(&c)
+                    || [a, b].contains(&d)
+                    || e_still == f_still
+                    || own.distance(&edge_tree.aabb(f)) >= farthest(&[a, b, c, d])
+                {
+                    return;
+                }
+                let distance = edge_edge(x, [a, b], [c, d]);
+                let apart = if e_still { kept(&[c, d], &[a, b]) } else { kept(&[a, b], &[c, d]) };
+                if distance < reach && !apart {
+                    [a, b, c, d].into_iter().for_each(|k| lower(k, distance));
+                }
+            });
+        });
+    }
+
+    /// Whether the last call gave any vertex a still triangle's plane.
+    pub fn supported(&self) -> bool {
+        self.supported
+    }
+
+    /// The still triangle vertex `i`, at `end[i]`, rests on, of those the planes of the
+    /// last call stood on: one whose plane it lies beyond by no more than the layers'
+    /// separation (and what the contact stage lets pass as round-off). Its normal towards
+    /// the vertex, its velocity under the vertex (its vertices' moves from `start` over
+    /// `h`) and the layers' friction.
+    pub fn resting_on(
+        &self,
+        triangles: &[[u32; 3]],
+        layers: LayerContact,
+        i: usize,
+        end: &[Vec3],
+        start: &[Vec3],
+        h: f32,
+    ) -> Option<(Vec3, Vec3, f32)> {
+        let t = supporting(self.support.get(i).filter(|_| self.supported)?)?;
+        let triangle = triangles[t as usize];
+        let (_, normal, height) = over(triangle, end, end[i]);
+        if height <= 0.0 || height > layers.separation * (1.0 + CAUGHT) {
+            return None;
+        }
+        let [a, b, c] = triangle.map(|k| end[k as usize]);
+        let w = closest_on_triangle(end[i], a, b, c);
+        let velocity =
+            (0..3).map(|k| w[k] * (end[triangle[k] as usize] - start[triangle[k] as usize])).sum::<Vec3>() / h;
+        Some((normal, velocity, layers.friction))
+    }
+}
+
+/// The bound's [`Bound::slack`] beyond a still triangle's plane, as a fraction of the
+/// layers' separation: as a body's is of its thickness.
+const SLACK: f32 = 0.5 * CAUGHT;
+
+/// Lowers vertex `k`'s nearest distance to `d`.
+fn lower_to(nearest: &[AtomicU32], k: u32, d: f32) {
+    nearest[k as usize].fetch_min(d.to_bits(), Ordering::Relaxed);
+}
+
+/// The largest nearest distance so far of `vertices`.
+fn farthest_in(nearest: &[AtomicU32], vertices: &[u32]) -> f32 {
+    vertices.iter().map(|&k| f32::from_bits(nearest[k as usize].load(Ordering::Relaxed))).fold(0.0, f32::max)
+}
+
+/// The still triangle a vertex's support holds, if any.
+fn supporting(support: &AtomicU64) -> Option<u32> {
+    let s = support.load(Ordering::Relaxed);
+    (s != NO_SUPPORT).then_some((s & u64::from(u32::MAX)) as u32)
+}
+
+/// Triangle `triangle` at `x` seen from `p`: `p`, the triangle's unit normal on `p`'s
+/// side, and `p`'s height above the triangle's plane.
+fn over(triangle: [u32; 3], x: &[Vec3], p: Vec3) -> (Vec3, Vec3, f32) {
+    let [a, b, c] = triangle.map(|k| x[k as usize]);
+    let normal = (b - a).cross(c - a).normalize_or_zero();
+    let height = normal.dot(p - a);
+    if height < 0.0 { (p, -normal, -height) } else { (p, normal, height) }
+}
+
+/// The distance between edges `e` and `f` at `x`.
+fn edge_edge(x: &[Vec3], e: [u32; 2], f: [u32; 2]) -> f32 {
+    let [pa, pb, pc, pd] = [e[0], e[1], f[0], f[1]].map(|k| x[k as usize]);
+    let (s, t) = closest_between_segments(pa, pb, pc, pd);
+    (pa + s * (pb - pa)).distance(pc + t * (pd - pc))
+}
+
+/// Whether the planes keep the `moving` vertices, at `x` where their bounds are measured,
+/// off the `still` ones whatever they do within their bounds: every moving vertex has a
+/// plane, and the first one's plane has the still vertices behind it by more than
+/// `tolerance`, and every moving vertex ahead of it. Each vertex `u` keeps to its own
+/// plane, `n_u · y ≥ w_u`, and within `travel` of `x_u`, so along the first's normal `n`,
+/// `n · y − w ≥ (w_u − w) + (n − n_u) · x_u − |n − n_u| travel`; a point of the moving
+/// primitive is a convex combination of its vertices, so it lies ahead of the least of
+/// these. On a flat still layer the planes agree to round-off and the test holds with the
+/// whole gap to spare; where they disagree by more than the gap over a move, it fails,
+/// and the pair bounds the balls.
+fn guarded(planes: &[Vec4], x: &[Vec3], moving: &[u32], still: &[u32], travel: f32, tolerance: f32) -> bool {
+    let first = planes[moving[0] as usize];
+    if moving.iter().any(|&u| planes[u as usize] == Vec4::ZERO) {
+        return false;
+    }
+    let (normal, w) = (first.truncate(), first.w);
+    let ahead = moving
+        .iter()
+        .map(|&u| {
+            let plane = planes[u as usize];
+            let tilt = normal - plane.truncate();
+            (plane.w - w) + tilt.dot(x[u as usize]) - tilt.length() * travel
+        })
+        .fold(f32::INFINITY, f32::min);
+    let behind = still.iter().map(|&q| normal.dot(x[q as usize]) - w).fold(f32::NEG_INFINITY, f32::max);
+    behind < ahead - tolerance
 }
 
 #[cfg(test)]
@@ -433,7 +706,7 @@ pub(crate) mod tests {
         let surface = Surface { triangles: &triangles, edges: &edges };
         let mut bounds = vec![Bound::FREE; x0.len()];
         let mut motion = MotionBounds::default();
-        motion.compute(surface, None, &x0, 1.0, &mut bounds);
+        motion.compute(surface, None, None, &x0, 1.0, &mut bounds);
         // Each bound is at most GAMMA times the layers' gap: the nearest pair of a vertex
         // is across the gap (4 ± 1.5 mm) or along its own sheet (7 mm).
         assert!(bounds.iter().all(|b| b.plane == Vec4::ZERO && b.radius > 0.0 && b.radius <= GAMMA * 0.0055 + 1e-6));
@@ -458,7 +731,7 @@ pub(crate) mod tests {
         assert!(any_crossing(&triangles, &edges, &x0, &through));
         // A second call over the same mesh gives the same bounds.
         let mut again = vec![Bound::FREE; x0.len()];
-        motion.compute(surface, None, &x0, 1.0, &mut again);
+        motion.compute(surface, None, None, &x0, 1.0, &mut again);
         assert_eq!(again, bounds);
     }
 
@@ -480,8 +753,8 @@ pub(crate) mod tests {
         let surface = Surface { triangles: &upper, edges: &upper_edges };
         let mut motion = MotionBounds::default();
         let (mut alone, mut bounds) = (vec![Bound::FREE; 36], vec![Bound::FREE; 36]);
-        motion.compute(surface, None, x_upper, 1.0, &mut alone);
-        motion.compute(surface, surfaces.others(own), x_upper, 1.0, &mut bounds);
+        motion.compute(surface, None, None, x_upper, 1.0, &mut alone);
+        motion.compute(surface, surfaces.others(own), None, x_upper, 1.0, &mut bounds);
         // Alone, each vertex is bounded by its own sheet (7 mm to the nearest diagonal);
         // with the other cloth, by the gap (4 ± 1.5 mm).
         assert!(alone.iter().all(|b| b.radius > GAMMA * 0.0065), "{alone:?}");
@@ -504,8 +777,81 @@ pub(crate) mod tests {
         let away: Vec<Vec3> = x_lower.iter().map(|p| *p - 0.01 * Vec3::Y).collect();
         surfaces.moved(0, &away);
         let mut looser = vec![Bound::FREE; 36];
-        motion.compute(surface, surfaces.others(own), x_upper, 1.0, &mut looser);
+        motion.compute(surface, surfaces.others(own), None, x_upper, 1.0, &mut looser);
         assert_eq!(looser, alone);
+    }
+
+    #[test]
+    fn a_layer_over_a_still_layer_keeps_to_its_planes_and_slides_past_its_balls() {
+        // The two layers, the lower one smoothed to a tenth of its roughness (±0.075 mm)
+        // and still (pinned): each upper vertex keeps to the plane of the lower triangle
+        // under it, grown by a 2 mm separation. (Over the crumpled one, whose triangles'
+        // planes differ by a tenth of a radian, most pairs fail the planes' test.)
+        let mut rng = Lcg(5);
+        let (mut x0, triangles) = two_layers(&mut rng);
+        x0[..36].iter_mut().for_each(|p| p.y *= 0.1);
+        // The upper one 1.5 mm lower, 2.5 ± 0.75 mm up: within reach of its balls.
+        x0[36..].iter_mut().for_each(|p| p.y -= 0.0015);
+        let edges = ContactMesh::edges_of(&triangles);
+        let surface = Surface { triangles: &triangles, edges: &edges };
+        let mobility: Vec<Mobility> = (0..72).map(|i| if i < 36 { Mobility::Still } else { Mobility::Free }).collect();
+        let resting = Resting { mobility: &mobility, separation: 0.002 };
+        let (mut balls, mut bounds) = (vec![Bound::FREE; 72], vec![Bound::FREE; 72]);
+        let mut motion = MotionBounds::default();
+        motion.compute(surface, None, None, &x0, 1.0, &mut balls);
+        motion.compute(surface, None, Some(resting), &x0, 1.0, &mut bounds);
+        assert!(motion.supported());
+        // Without the planes every upper ball is 0.4 of the gap; with them,
+        // those over the lower layer's middle keep to a plane at 2 mm, and their balls are
+        // set by their own sheet, its nearest diagonal 7 mm away.
+        assert!(balls[36..].iter().all(|b| b.radius <= GAMMA * 0.0035 + 1e-6));
+        let planed: Vec<usize> = (36..72).filter(|&i| bounds[i].plane != Vec4::ZERO).collect();
+        let loosened = planed.iter().filter(|&&i| bounds[i].radius > GAMMA * 0.0065).count();
+        assert!(planed.len() >= 16 && loosened >= 8, "{} planes, {loosened} balls loosened", planed.len());
+        for &i in &planed {
+            let room = bounds[i].room(x0[i]);
+            assert!((0.0..0.002).contains(&room), "vertex {i}: {room} m beyond its plane");
+        }
+        // Every upper vertex moves as far as its bound lets it, along the layer, down
+        // into it or anywhere, its move cut at its plane: nothing crosses.
+        let moved = |bounds: &[Bound], direction: &mut dyn FnMut() -> Vec3| -> Vec<Vec3> {
+            (0..72)
+                .map(|i| {
+                    let (p, b) = (x0[i], bounds[i]);
+                    if i < 36 {
+                        return p;
+                    }
+                    let step = b.radius * direction();
+                    p + b.plane_allows(p, step) * step
+                })
+                .collect()
+        };
+        for trial in 0..30 {
+            let x1 = match trial % 3 {
+                0 => moved(&bounds, &mut || -Vec3::Y),
+                1 => {
+                    let along = rng.direction().with_y(-0.2).normalize();
+                    moved(&bounds, &mut || along)
+                }
+                _ => moved(&bounds, &mut || rng.direction()),
+            };
+            assert!(!any_crossing(&triangles, &edges, &x0, &x1), "trial {trial} crossed");
+        }
+        // The planes do the holding: many balls reach past them. And the check can fail:
+        // the same moves down, past the planes, cross.
+        assert!(planed.iter().filter(|&&i| bounds[i].radius > bounds[i].room(x0[i])).count() >= 8);
+        let through = moved(&bounds.iter().map(|b| Bound::within(b.radius)).collect::<Vec<_>>(), &mut || -Vec3::Y);
+        assert!(any_crossing(&triangles, &edges, &x0, &through));
+        // The friction's support: an upper vertex on its plane rests on the layer, one
+        // lifted away does not.
+        let layers = LayerContact { separation: 0.002, friction: 0.3 };
+        let i = planed[0];
+        let mut end = x0.clone();
+        end[i] -= bounds[i].room(x0[i]) * bounds[i].plane.truncate();
+        let (normal, velocity, friction) = motion.resting_on(&triangles, layers, i, &end, &x0, 0.01).expect("rests");
+        assert!(normal.y > 0.9 && velocity == Vec3::ZERO && friction == 0.3, "{normal} {velocity}");
+        end[i] += 0.01 * Vec3::Y;
+        assert!(motion.resting_on(&triangles, layers, i, &end, &x0, 0.01).is_none());
     }
 
     #[test]
@@ -524,7 +870,14 @@ pub(crate) mod tests {
         }
         let edges = ContactMesh::edges_of(&triangles);
         let mut bounds = vec![Bound::FREE; x.len()];
-        MotionBounds::default().compute(Surface { triangles: &triangles, edges: &edges }, None, &x, 1.0, &mut bounds);
+        MotionBounds::default().compute(
+            Surface { triangles: &triangles, edges: &edges },
+            None,
+            None,
+            &x,
+            1.0,
+            &mut bounds,
+        );
         let reach: f32 =
             edges.iter().map(|&[a, b]| x[a as usize].distance(x[b as usize])).sum::<f32>() / edges.len() as f32;
         assert!(reach > std::f32::consts::FRAC_1_SQRT_2);

@@ -35,7 +35,7 @@ use rayon::prelude::*;
 use super::elements::BlockPattern;
 use super::filter::Filters;
 use super::implicit::StepSystem;
-use crate::collision::motion_bounds::Bound;
+use crate::collision::motion_bounds::{Bound, Mobility};
 
 /// Rows per parallel task in a colour: a row is a few hundred flops, and colours are a
 /// fraction of the cloth, so the cut-off is lower than the crate's.
@@ -138,11 +138,14 @@ pub struct DescentWorkspace {
     update: Vec<(Vec3, f64, bool)>,
     /// Per particle, where it may move from the anchor.
     bounds: Vec<Bound>,
+    /// Per particle, how it moves in the sweeps, for the bounds.
+    mobility: Vec<Mobility>,
 }
 
 /// Where block descent's iterate puts the particles, and where they may move: particle
 /// `i` is at `base[i] + scale · delta[i]`, and keeps within `bounds[i]` about
-/// `anchor[i]`, bounds that `bound` measures at a configuration.
+/// `anchor[i]`, bounds that `bound` measures at a configuration, knowing which particles
+/// the sweeps leave still there ([`Mobility`]).
 pub struct BoundedMotion<'a> {
     /// Positions at `delta = 0` [m].
     pub base: &'a [Vec3],
@@ -152,8 +155,9 @@ pub struct BoundedMotion<'a> {
     /// particles end, which is one too.
     pub anchor: &'a mut [Vec3],
     /// Fills, for the particles at the given positions, where each may move, asked for
-    /// moves as long as the second argument [m] where the geometry allows them.
-    pub bound: &'a mut dyn FnMut(&[Vec3], f32, &mut [Bound]),
+    /// moves as long as the second argument [m] where the geometry allows them; the third
+    /// says how each moves.
+    pub bound: &'a mut dyn FnMut(&[Vec3], f32, &[Mobility], &mut [Bound]),
 }
 
 impl BoundedMotion<'_> {
@@ -251,8 +255,28 @@ const FIXED_NORMAL: f32 = 1e-6;
 /// room to spare, that round-off led the plane to cut the whole move, slide and all. On
 /// Zheng's slope at one step a frame every slide faster than 3.5 m/s was so cut, and the
 /// cloth, sliding at 3.12 m/s², slowed at 1.2 m/s² instead.
-fn measure(motion: &mut BoundedMotion<'_>, wanted: f32, filter: &Filters, bounds: &mut [Bound]) {
-    (motion.bound)(motion.anchor, wanted, bounds);
+///
+/// A pinned particle at its anchor is still for the bounds: the sweeps leave it there.
+fn measure(
+    motion: &mut BoundedMotion<'_>,
+    delta: &[Vec3],
+    wanted: f32,
+    filter: &Filters,
+    mobility: &mut Vec<Mobility>,
+    bounds: &mut [Bound],
+) {
+    let frame = motion.frame();
+    mobility.resize(delta.len(), Mobility::Free);
+    mobility.par_iter_mut().enumerate().with_min_len(super::PARALLEL_MIN_LEN).for_each(|(i, m)| {
+        *m = if filter.is_free(i) {
+            Mobility::Free
+        } else if filter.is_pinned(i) && frame.offset(i, delta[i]) == Vec3::ZERO {
+            Mobility::Still
+        } else {
+            Mobility::Constrained
+        };
+    });
+    (motion.bound)(motion.anchor, wanted, mobility, bounds);
     bounds.par_iter_mut().enumerate().with_min_len(super::PARALLEL_MIN_LEN).for_each(|(i, bound)| {
         if !filter.is_free(i) && filter.apply(i, bound.plane.truncate()).length_squared() < FIXED_NORMAL {
             bound.plane = Vec4::ZERO;
@@ -271,7 +295,13 @@ fn measure(motion: &mut BoundedMotion<'_>, wanted: f32, filter: &Filters, bounds
 /// Starting the sweeps from the bounds instead, every particle held back by them, would
 /// leave the sweeps a global error to remove, which Gauss–Seidel removes last: a falling
 /// strip's speed stayed at the bound per step.
-fn advance_anchor(motion: &mut BoundedMotion<'_>, delta: &mut [Vec3], filter: &Filters, bounds: &mut [Bound]) -> f32 {
+fn advance_anchor(
+    motion: &mut BoundedMotion<'_>,
+    delta: &mut [Vec3],
+    filter: &Filters,
+    mobility: &mut Vec<Mobility>,
+    bounds: &mut [Bound],
+) -> f32 {
     let n = delta.len();
     let frame = motion.frame();
     let mut wanted = (0..n)
@@ -280,7 +310,7 @@ fn advance_anchor(motion: &mut BoundedMotion<'_>, delta: &mut [Vec3], filter: &F
         .map(|i| frame.offset(i, delta[i]).length())
         .reduce(|| 0.0, f32::max);
     for advance in 1..=MAX_ADVANCES {
-        measure(motion, wanted, filter, bounds);
+        measure(motion, delta, wanted, filter, mobility, bounds);
         // How many particles the bounds stop short of the start, and how far from it the
         // farthest would be left after a move.
         let frame = motion.frame();
@@ -359,7 +389,7 @@ pub fn descend(
     let mut wanted = 0.0f32;
     if let Some(motion) = &mut motion {
         ws.bounds.resize(n, Bound::FREE);
-        wanted = advance_anchor(motion, delta, filter, &mut ws.bounds);
+        wanted = advance_anchor(motion, delta, filter, &mut ws.mobility, &mut ws.bounds);
     }
     let target: f64 = f64::from(tolerance).powi(2)
         * rhs.iter().enumerate().map(|(i, r)| f64::from(filter.apply(i, *r).length_squared())).sum::<f64>();
@@ -436,7 +466,7 @@ pub fn descend(
             && (sweep + 1).trailing_zeros() % 2 == 0
         {
             motion.settle(delta);
-            measure(motion, wanted, filter, &mut ws.bounds);
+            measure(motion, delta, wanted, filter, &mut ws.mobility, &mut ws.bounds);
             cuts = 0;
         }
     }
@@ -496,7 +526,7 @@ mod tests {
         h: f32,
         solution: &[Vec3],
         sweeps: u32,
-        bound: Option<&mut dyn FnMut(&[Vec3], f32, &mut [Bound])>,
+        bound: Option<&mut dyn FnMut(&[Vec3], f32, &[Mobility], &mut [Bound])>,
     ) -> Vec<Vec3> {
         let n = x0.len();
         let (pattern, system) = edge_springs(n, edges, h);
@@ -635,7 +665,7 @@ mod tests {
         let sphere = body(SharedShape::ball(radius), centre);
         let (edges, solution) = (ContactMesh::edges_of(&triangles), vec![-0.012 / h * Vec3::Y; n]);
         let after = |sweeps: u32, bounded: bool| {
-            let mut bound = |x: &[Vec3], _: f32, out: &mut [Bound]| {
+            let mut bound = |x: &[Vec3], _: f32, _: &[Mobility], out: &mut [Bound]| {
                 out.fill(Bound::FREE);
                 body_bounds::limit(std::slice::from_ref(&sphere), x, out);
             };
@@ -669,7 +699,9 @@ mod tests {
         // sweeps of a longer run begin as a shorter run's did.
         let after = |sweeps: u32, bounded: bool| {
             let mut search = MotionBounds::default();
-            let mut bound = |x: &[Vec3], wanted: f32, out: &mut [Bound]| search.compute(surface, None, x, wanted, out);
+            let mut bound = |x: &[Vec3], wanted: f32, _: &[Mobility], out: &mut [Bound]| {
+                search.compute(surface, None, None, x, wanted, out);
+            };
             swept(&x0, &edges, h, &solution, sweeps, bounded.then_some(&mut bound))
         };
         let path = |bounded: bool| -> Vec<Vec<Vec3>> {

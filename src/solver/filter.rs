@@ -85,6 +85,12 @@ impl Filters {
         self.index[i] == FREE
     }
 
+    /// Whether particle `i` is pinned (its filter zero): the solve leaves it where its
+    /// prescribed part puts it.
+    pub fn is_pinned(&self, i: usize) -> bool {
+        self.index[i] != FREE && self.blocks[self.index[i] as usize] == Mat3::ZERO
+    }
+
     /// Particle `i`'s Jacobi step for the diagonal block `diagonal`, `(S D S + I − S)⁻¹ S`
     /// ([`filtered_inverse`]), without products with the identity where it is free.
     #[inline]

@@ -16,7 +16,7 @@ use super::integrate::Dynamics;
 use super::multigrid::Hierarchy;
 use super::reduce;
 use crate::collision::body_contact::ContactBody;
-use crate::collision::motion_bounds::{Others, Surface};
+use crate::collision::motion_bounds::{LayerContact, Others, Surface};
 use crate::components::{BendingHinges, ClothElements, ClothTopology, Csr, MembraneTriangles, Springs};
 use crate::memory::release;
 
@@ -758,8 +758,9 @@ pub struct ClothDynamics<'a> {
     pub free_inv_mass: &'a [f32],
     /// Element buffers for [`ForceModel::eval`].
     pub scratch: &'a mut ForceScratch,
-    /// Whether the cloth collides with itself, which bounds block descent's iterations.
-    pub self_collision: bool,
+    /// How the cloth's layers meet, where it collides with itself, which bounds block
+    /// descent's iterations.
+    pub self_collision: Option<LayerContact>,
     /// The other cloths it collides with, which bound block descent's iterations too.
     pub others: Option<Others<'a>>,
     /// The cloth–cloth contacts the implicit step holds apart.
@@ -804,7 +805,11 @@ impl LinearDynamics for ClothDynamics<'_> {
 
     fn contact_surface(&self) -> Option<Surface<'_>> {
         let (triangles, topology) = (self.model.triangles, self.model.topology);
-        self.self_collision.then(|| Surface { triangles, edges: topology.edges(triangles) })
+        self.self_collision.map(|_| Surface { triangles, edges: topology.edges(triangles) })
+    }
+
+    fn layer_contact(&self) -> Option<LayerContact> {
+        self.self_collision
     }
 
     fn contact_others(&self) -> Option<Others<'_>> {
@@ -1065,7 +1070,7 @@ mod tests {
                 model,
                 free_inv_mass: &fixture.topology.free_inv_mass,
                 scratch: &mut scratch,
-                self_collision: false,
+                self_collision: None,
                 others: None,
                 contact_springs: &mut [],
                 bodies: &[],

@@ -35,7 +35,7 @@ use super::warm_start::WarmStart;
 use super::{PARALLEL_MIN_LEN, add_rows};
 use crate::collision::body_bounds;
 use crate::collision::body_contact::ContactBody;
-use crate::collision::motion_bounds::{Bound, MotionBounds, Others, Surface};
+use crate::collision::motion_bounds::{Bound, LayerContact, Mobility, MotionBounds, Others, Resting, Surface};
 
 /// Rayleigh damping `C = αM + βK_s` (K_s the stiffness, `−∂f/∂x`).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -111,6 +111,11 @@ pub trait LinearDynamics: Dynamics + Sync {
     /// The surface whose contact with itself bounds each iteration of block descent, if
     /// the system collides with itself.
     fn contact_surface(&self) -> Option<Surface<'_>> {
+        None
+    }
+    /// How the layers of the system's cloth meet, where it collides with itself: what a
+    /// layer resting on a still one of it keeps to within block descent's sweeps.
+    fn layer_contact(&self) -> Option<LayerContact> {
         None
     }
     /// The other cloths the system's cloth collides with, standing still while it is
@@ -824,15 +829,24 @@ fn solve(
         }
         LinearSolver::BlockDescent(descent) => {
             let ImplicitWorkspace { x: base, anchor, motion_bounds, .. } = ws;
-            let (surface, others, bodies) =
-                (dynamics.contact_surface(), dynamics.contact_others(), dynamics.contact_bodies());
-            let mut bound = bounded(settings, dynamics).then_some(move |x: &[Vec3], wanted: f32, out: &mut [Bound]| {
-                match surface {
-                    Some(surface) => motion_bounds.compute(surface, others, x, wanted, out),
-                    None => out.fill(Bound::FREE),
-                }
-                body_bounds::limit(bodies, x, out);
-            });
+            let (surface, others, bodies, layers) = (
+                dynamics.contact_surface(),
+                dynamics.contact_others(),
+                dynamics.contact_bodies(),
+                dynamics.layer_contact(),
+            );
+            let mut bound = bounded(settings, dynamics).then_some(
+                move |x: &[Vec3], wanted: f32, mobility: &[Mobility], out: &mut [Bound]| {
+                    match surface {
+                        Some(surface) => {
+                            let resting = layers.map(|layers| Resting { mobility, separation: layers.separation });
+                            motion_bounds.compute(surface, others, resting, x, wanted, out);
+                        }
+                        None => out.fill(Bound::FREE),
+                    }
+                    body_bounds::limit(bodies, x, out);
+                },
+            );
             let motion = bound.as_mut().map(|bound| BoundedMotion { base, scale, anchor, bound });
             let held = motion.is_some();
             let sweeps = descend(
@@ -865,7 +879,10 @@ fn solve(
 /// on a convex body ([`body_bounds::resting_on`]), `J = (A Δv − b)_i` along the body's
 /// normal is the impulse the body gave it, and Coulomb's friction takes up to `μ J_n / m`
 /// off its velocity along the surface, relative to the body (the step's end velocity, its
-/// move over `h`: θ is 1). Particles the contact constraints hold are left to them.
+/// move over `h`: θ is 1). Particles the contact constraints hold are left to them. A
+/// particle resting on a still layer of its cloth, whose plane held it within the sweeps
+/// ([`MotionBounds::resting_on`]), takes the layers' friction from its push the same way,
+/// relative to the layer under it.
 fn push_friction(
     dynamics: &impl LinearDynamics,
     settings: &ImplicitSettings,
@@ -874,18 +891,23 @@ fn push_friction(
     ws: &mut ImplicitWorkspace,
 ) {
     let bodies = dynamics.contact_bodies();
-    if bodies.is_empty() {
+    let layers = dynamics.layer_contact().zip(dynamics.contact_surface()).filter(|_| ws.motion_bounds.supported());
+    if bodies.is_empty() && layers.is_none() {
         return;
     }
     multiply_solution(dynamics, settings, ws);
-    let (end, rhs, filter) = (&ws.anchor, &ws.rhs, &ws.filter);
+    let (end, rhs, filter, motion_bounds) = (&ws.anchor, &ws.rhs, &ws.filter, &ws.motion_bounds);
     ws.product.par_iter_mut().enumerate().with_min_len(PARALLEL_MIN_LEN).for_each(|(i, change)| {
         let push = *change - rhs[i];
         *change = Vec3::ZERO;
         if !filter.is_free(i) {
             return;
         }
-        let Some((normal, velocity, friction)) = body_bounds::resting_on(bodies, end[i]) else { return };
+        let on_layer =
+            || layers.and_then(|(layers, surface)| motion_bounds.resting_on(surface.triangles, layers, i, end, x, h));
+        let Some((normal, velocity, friction)) = body_bounds::resting_on(bodies, end[i]).or_else(on_layer) else {
+            return;
+        };
         let pressed = push.dot(normal);
         let relative = (end[i] - x[i]) / h - velocity;
         let slide = relative - normal.dot(relative) * normal;

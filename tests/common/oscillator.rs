@@ -93,7 +93,7 @@ impl ParticleSystem {
             model,
             free_inv_mass: &self.topology.free_inv_mass,
             scratch: &mut scratch,
-            self_collision: false,
+            self_collision: None,
             others: None,
             contact_springs: &mut [],
             bodies: &[],
