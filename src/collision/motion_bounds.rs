@@ -258,6 +258,10 @@ pub struct MotionBounds {
     planes: Vec<Vec4>,
     /// Whether the last call gave any vertex a still triangle's plane.
     supported: bool,
+    /// Per vertex and per edge, whether it has a pair with one side still, which the
+    /// planes' pass visits again.
+    vertices_left: Vec<bool>,
+    edges_left: Vec<bool>,
 }
 
 impl Clone for MotionBounds {
@@ -314,7 +318,8 @@ impl MotionBounds {
         // A pair with one side still and the other not: the still side's plane may keep
         // it apart, which only the pass after the planes knows.
         let one_side_still = |a: &[u32], b: &[u32]| all_still(a) != all_still(b);
-        let Self { triangle_tree, edge_tree, nearest, support, .. } = &*self;
+        let Self { triangle_tree, edge_tree, nearest, support, vertices_left, edges_left, .. } = self;
+        let (triangle_tree, edge_tree, nearest, support) = (&*triangle_tree, &*edge_tree, &*nearest, &*support);
         let lower = |k: u32, d: f32| lower_to(nearest, k, d);
         // A pair can lower no vertex's distance once it is at least the largest of its
         // vertices' distances so far, which only fall: skipping it where its boxes' gap
@@ -326,58 +331,75 @@ impl MotionBounds {
             p.distance(w[0] * a + w[1] * b + w[2] * c)
         };
         // Each vertex against the triangles around it; a free vertex's pairs with still
-        // triangles are where it looks for the one it lies over.
-        (0..x.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).for_each(|v| {
-            let p = x[v as usize];
-            let mut own = reach;
-            let point = Aabb::around([p]);
-            triangle_tree.query(&point.inflated(reach), |t| {
-                let triangle = triangles[t as usize];
-                if triangle.contains(&v) {
-                    return;
-                }
-                if one_side_still(&[v], &triangle) {
-                    if mobility(v) == Mobility::Free && point.distance(&triangle_tree.aabb(t)) < reach {
-                        let d = point_triangle(p, triangle);
-                        let [a, b, c] = triangle.map(|k| x[k as usize]);
-                        let height = (b - a).cross(c - a).normalize_or_zero().dot(p - a).abs();
-                        if d < reach && height > 0.0 && height >= OVER * d {
-                            support[v as usize]
-                                .fetch_min(u64::from(d.to_bits()) << 32 | u64::from(t), Ordering::Relaxed);
-                        }
+        // triangles are where it looks for the one it lies over. Each says whether it
+        // left a pair with one side still to the planes' pass, and so does each edge.
+        (0..x.len() as u32)
+            .into_par_iter()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .map(|v| {
+                let p = x[v as usize];
+                let mut own = reach;
+                let point = Aabb::around([p]);
+                let mut left = false;
+                triangle_tree.query(&point.inflated(reach), |t| {
+                    let triangle = triangles[t as usize];
+                    if triangle.contains(&v) {
+                        return;
                     }
-                    return;
-                }
-                if point.distance(&triangle_tree.aabb(t)) >= own.max(farthest(&triangle)) {
-                    return;
-                }
-                let d = point_triangle(p, triangle);
-                if d < reach {
-                    own = own.min(d);
-                    triangle.iter().for_each(|&k| lower(k, d));
-                }
-            });
-            lower(v, own);
-        });
+                    if one_side_still(&[v], &triangle) {
+                        left = true;
+                        if mobility(v) == Mobility::Free && point.distance(&triangle_tree.aabb(t)) < reach {
+                            let d = point_triangle(p, triangle);
+                            let [a, b, c] = triangle.map(|k| x[k as usize]);
+                            let height = (b - a).cross(c - a).normalize_or_zero().dot(p - a).abs();
+                            if d < reach && height > 0.0 && height >= OVER * d {
+                                support[v as usize]
+                                    .fetch_min(u64::from(d.to_bits()) << 32 | u64::from(t), Ordering::Relaxed);
+                            }
+                        }
+                        return;
+                    }
+                    if point.distance(&triangle_tree.aabb(t)) >= own.max(farthest(&triangle)) {
+                        return;
+                    }
+                    let d = point_triangle(p, triangle);
+                    if d < reach {
+                        own = own.min(d);
+                        triangle.iter().for_each(|&k| lower(k, d));
+                    }
+                });
+                lower(v, own);
+                left
+            })
+            .collect_into_vec(vertices_left);
         // Each edge against the edges after it.
-        (0..edges.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).for_each(|e| {
-            let [a, b] = edges[e as usize];
-            let own = edge_tree.aabb(e);
-            edge_tree.query_from(&own.inflated(reach), e + 1, |f| {
-                let [c, d] = edges[f as usize];
-                if [a, b].contains(&c)
-                    || [a, b].contains(&d)
-                    || one_side_still(&[a, b], &[c, d])
-                    || own.distance(&edge_tree.aabb(f)) >= farthest(&[a, b, c, d])
-                {
-                    return;
-                }
-                let distance = edge_edge(x, [a, b], [c, d]);
-                if distance < reach {
-                    [a, b, c, d].into_iter().for_each(|k| lower(k, distance));
-                }
-            });
-        });
+        (0..edges.len() as u32)
+            .into_par_iter()
+            .with_min_len(PARALLEL_MIN_LEN)
+            .map(|e| {
+                let [a, b] = edges[e as usize];
+                let own = edge_tree.aabb(e);
+                let mut left = false;
+                edge_tree.query_from(&own.inflated(reach), e + 1, |f| {
+                    let [c, d] = edges[f as usize];
+                    if [a, b].contains(&c) || [a, b].contains(&d) {
+                        return;
+                    }
+                    if one_side_still(&[a, b], &[c, d]) {
+                        left = true;
+                        return;
+                    }
+                    if own.distance(&edge_tree.aabb(f)) >= farthest(&[a, b, c, d]) {
+                        return;
+                    }
+                    let distance = edge_edge(x, [a, b], [c, d]);
+                    if distance < reach {
+                        [a, b, c, d].into_iter().for_each(|k| lower(k, distance));
+                    }
+                });
+                left
+            })
+            .collect_into_vec(edges_left);
         if let Some(resting) = resting {
             self.planes(triangles, x, resting.separation);
             self.guard(surface, resting, x, reach);
@@ -480,10 +502,11 @@ impl MotionBounds {
     }
 
     /// Lowers the distances of the pairs with one side still that the planes do not keep
-    /// apart: every one where no vertex has a plane.
+    /// apart: every one where no vertex has a plane. Visits only the vertices and edges
+    /// the first pass found such pairs of.
     fn guard(&self, surface: Surface<'_>, resting: Resting<'_>, x: &[Vec3], reach: f32) {
         let Surface { triangles, edges } = surface;
-        let Self { triangle_tree, edge_tree, nearest, planes, .. } = self;
+        let Self { triangle_tree, edge_tree, nearest, planes, vertices_left, edges_left, .. } = self;
         let still = |k: u32| resting.mobility[k as usize] == Mobility::Still;
         let all_still = |vertices: &[u32]| vertices.iter().all(|&k| still(k));
         let lower = |k: u32, d: f32| lower_to(nearest, k, d);
@@ -491,7 +514,8 @@ impl MotionBounds {
         let kept = |moving: &[u32], still: &[u32]| {
             self.supported && guarded(planes, x, moving, still, GAMMA * reach, SLACK * resting.separation)
         };
-        (0..x.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).for_each(|v| {
+        let vertices = (0..x.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN);
+        vertices.filter(|&v| vertices_left[v as usize]).for_each(|v| {
             let p = x[v as usize];
             let point = Aabb::around([p]);
             triangle_tree.query(&point.inflated(reach), |t| {
@@ -512,7 +536,8 @@ impl MotionBounds {
                 }
             });
         });
-        (0..edges.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN).for_each(|e| {
+        let edge_numbers = (0..edges.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN);
+        edge_numbers.filter(|&e| edges_left[e as usize]).for_each(|e| {
             let [a, b] = edges[e as usize];
             let own = edge_tree.aabb(e);
             edge_tree.query_from(&own.inflated(reach), e + 1, |f| {

@@ -34,6 +34,7 @@ use rayon::prelude::*;
 
 use super::elements::BlockPattern;
 use super::filter::Filters;
+use super::floating::FloatingPieces;
 use super::implicit::StepSystem;
 use crate::collision::motion_bounds::{Bound, Mobility};
 
@@ -140,6 +141,8 @@ pub struct DescentWorkspace {
     bounds: Vec<Bound>,
     /// Per particle, how it moves in the sweeps, for the bounds.
     mobility: Vec<Mobility>,
+    /// The system's floating pieces, whose translations a coarse correction solves.
+    floating: FloatingPieces,
 }
 
 /// Where block descent's iterate puts the particles, and where they may move: particle
@@ -391,6 +394,8 @@ pub fn descend(
         ws.bounds.resize(n, Bound::FREE);
         wanted = advance_anchor(motion, delta, filter, &mut ws.mobility, &mut ws.bounds);
     }
+    ws.floating.find(system, filter);
+    translate_pieces(rhs, motion.as_ref(), delta, ws);
     let target: f64 = f64::from(tolerance).powi(2)
         * rhs.iter().enumerate().map(|(i, r)| f64::from(filter.apply(i, *r).length_squared())).sum::<f64>();
     let rho2 = settings.spectral_radius * settings.spectral_radius;
@@ -470,14 +475,31 @@ pub fn descend(
             cuts = 0;
         }
     }
+    translate_pieces(rhs, motion.as_ref(), delta, ws);
     if let Some(motion) = &mut motion {
         motion.settle(delta);
     }
     sweeps
 }
 
+/// Corrects the floating pieces' translations ([`FloatingPieces::correct`]), along the
+/// planes of their bounds that they are pressed against, and within the bounds.
+fn translate_pieces(rhs: &[Vec3], motion: Option<&BoundedMotion<'_>>, delta: &mut [Vec3], ws: &mut DescentWorkspace) {
+    let (bounds, frame) = (&ws.bounds, motion.map(BoundedMotion::frame));
+    // A particle within two slacks of its plane is pressed against it: a projected step
+    // puts it one slack beyond.
+    let plane = |i: usize, d: Vec3| match frame {
+        Some(f) if bounds[i].room(position(f.base, f.scale, i, d)) <= 2.0 * bounds[i].slack => {
+            bounds[i].plane.truncate()
+        }
+        _ => Vec3::ZERO,
+    };
+    let allowed = |i: usize, d: Vec3, t: Vec3| frame.map_or(1.0, |f| f.allowed(i, d, t, &bounds[i]));
+    ws.floating.correct(rhs, delta, plane, allowed);
+}
+
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use parry3d::shape::SharedShape;
 
     use super::*;
@@ -488,19 +510,24 @@ mod tests {
     use crate::collision::self_contact::ContactMesh;
     use crate::solver::elements::SymmetricBlockMatrix;
 
-    /// A chain of `n` particles joined by springs of stiffness `k`, mass `m`, as the
-    /// system `M + k L` of an implicit step, block-diagonal in the axes.
-    fn chain(n: usize, m: f32, k: f32) -> (BlockPattern, SymmetricBlockMatrix) {
-        let pairs: Vec<[u32; 2]> = (0..n as u32 - 1).map(|i| [i, i + 1]).collect();
+    /// `n` particles of mass `m` joined at `pairs` by springs of stiffness `k` along x, y
+    /// and z alike, as the system `M + k L` of an implicit step.
+    pub(crate) fn spring_system(n: usize, pairs: &[[u32; 2]], m: f32, k: f32) -> (BlockPattern, SymmetricBlockMatrix) {
         let pattern = BlockPattern::from_stencils(n, pairs.iter().map(|p| &p[..])).with_upper();
         let mut system = SymmetricBlockMatrix::default();
         system.reset(&pattern);
         system.add_diagonal(&pattern, |_| m);
         let stiffness = Mat3::from_diagonal(Vec3::splat(k));
-        for p in &pairs {
+        for p in pairs {
             system.add_local(*p, &pattern.upper_slots::<2, 3>(*p), &[[stiffness, -stiffness], [-stiffness, stiffness]]);
         }
         (pattern, system)
+    }
+
+    /// A chain of `n` particles joined by springs of stiffness `k`, mass `m`.
+    fn chain(n: usize, m: f32, k: f32) -> (BlockPattern, SymmetricBlockMatrix) {
+        let pairs: Vec<[u32; 2]> = (0..n as u32 - 1).map(|i| [i, i + 1]).collect();
+        spring_system(n, &pairs, m, k)
     }
 
     /// `n` particles of 1 g joined along `edges` by springs of 10 N/m, as the system

@@ -7,6 +7,7 @@ pub mod contact_springs;
 pub mod descent;
 pub mod elements;
 pub mod filter;
+pub mod floating;
 pub mod forces;
 pub mod gather;
 pub mod geometry;
