@@ -313,8 +313,7 @@ impl MotionBounds {
             self.support.par_iter().with_min_len(PARALLEL_MIN_LEN).for_each(|s| s.store(NO_SUPPORT, Ordering::Relaxed));
         }
         let mobility = |k: u32| resting.map_or(Mobility::Constrained, |r| r.mobility[k as usize]);
-        let all_still =
-            |vertices: &[u32]| resting.is_some() && vertices.iter().all(|&k| mobility(k) == Mobility::Still);
+        let all_still = |vertices: &[u32]| vertices.iter().all(|&k| mobility(k) == Mobility::Still);
         // A pair with one side still and the other not: the still side's plane may keep
         // it apart, which only the pass after the planes knows.
         let one_side_still = |a: &[u32], b: &[u32]| all_still(a) != all_still(b);
@@ -325,11 +324,7 @@ impl MotionBounds {
         // vertices' distances so far, which only fall: skipping it where its boxes' gap
         // says so leaves every minimum, and so the bounds, as they were.
         let farthest = |vertices: &[u32]| farthest_in(nearest, vertices);
-        let point_triangle = |p: Vec3, triangle: [u32; 3]| {
-            let [a, b, c] = triangle.map(|k| x[k as usize]);
-            let w = closest_on_triangle(p, a, b, c);
-            p.distance(w[0] * a + w[1] * b + w[2] * c)
-        };
+        let point_triangle = |p: Vec3, triangle: [u32; 3]| triangle_distance(p, triangle.map(|k| x[k as usize]));
         // Each vertex against the triangles around it; a free vertex's pairs with still
         // triangles are where it looks for the one it lies over. Each says whether it
         // left a pair with one side still to the planes' pass, and so does each edge.
@@ -349,9 +344,7 @@ impl MotionBounds {
                     if one_side_still(&[v], &triangle) {
                         left = true;
                         if mobility(v) == Mobility::Free && point.distance(&triangle_tree.aabb(t)) < reach {
-                            let d = point_triangle(p, triangle);
-                            let [a, b, c] = triangle.map(|k| x[k as usize]);
-                            let height = (b - a).cross(c - a).normalize_or_zero().dot(p - a).abs();
+                            let (d, (_, _, height)) = (point_triangle(p, triangle), over(triangle, x, p));
                             if d < reach && height > 0.0 && height >= OVER * d {
                                 support[v as usize]
                                     .fetch_min(u64::from(d.to_bits()) << 32 | u64::from(t), Ordering::Relaxed);
@@ -425,9 +418,7 @@ impl MotionBounds {
                         if point.distance(&tree.aabb(t)) >= own {
                             return;
                         }
-                        let [a, b, c] = their_triangles[t as usize].map(|k| y[k as usize]);
-                        let w = closest_on_triangle(p, a, b, c);
-                        own = own.min(p.distance(w[0] * a + w[1] * b + w[2] * c));
+                        own = own.min(triangle_distance(p, their_triangles[t as usize].map(|k| y[k as usize])));
                     });
                 }
                 lower(v, own);
@@ -441,9 +432,7 @@ impl MotionBounds {
                         if point.distance(&triangle_tree.aabb(t)) >= farthest(&triangle) {
                             return;
                         }
-                        let [a, b, c] = triangle.map(|k| x[k as usize]);
-                        let w = closest_on_triangle(p, a, b, c);
-                        let d = p.distance(w[0] * a + w[1] * b + w[2] * c);
+                        let d = triangle_distance(p, triangle.map(|k| x[k as usize]));
                         triangle.iter().for_each(|&k| lower(k, d));
                     });
                 });
@@ -527,11 +516,9 @@ impl MotionBounds {
                 {
                     return;
                 }
-                let [a, b, c] = triangle.map(|k| x[k as usize]);
-                let w = closest_on_triangle(p, a, b, c);
-                let d = p.distance(w[0] * a + w[1] * b + w[2] * c);
-                let apart = if v_still { kept(&triangle, &[v]) } else { kept(&[v], &triangle) };
-                if d < reach && !apart {
+                let d = triangle_distance(p, triangle.map(|k| x[k as usize]));
+                let apart = || if v_still { kept(&triangle, &[v]) } else { kept(&[v], &triangle) };
+                if d < reach && !apart() {
                     [v, triangle[0], triangle[1], triangle[2]].into_iter().for_each(|k| lower(k, d));
                 }
             });
@@ -551,8 +538,8 @@ impl MotionBounds {
                     return;
                 }
                 let distance = edge_edge(x, [a, b], [c, d]);
-                let apart = if e_still { kept(&[c, d], &[a, b]) } else { kept(&[a, b], &[c, d]) };
-                if distance < reach && !apart {
+                let apart = || if e_still { kept(&[c, d], &[a, b]) } else { kept(&[a, b], &[c, d]) };
+                if distance < reach && !apart() {
                     [a, b, c, d].into_iter().for_each(|k| lower(k, distance));
                 }
             });
@@ -595,6 +582,13 @@ impl MotionBounds {
 /// The bound's [`Bound::slack`] beyond a still triangle's plane, as a fraction of the
 /// layers' separation: as a body's is of its thickness.
 const SLACK: f32 = 0.5 * CAUGHT;
+
+/// The distance from `p` to the triangle with corners `corners`.
+fn triangle_distance(p: Vec3, corners: [Vec3; 3]) -> f32 {
+    let [a, b, c] = corners;
+    let w = closest_on_triangle(p, a, b, c);
+    p.distance(w[0] * a + w[1] * b + w[2] * c)
+}
 
 /// Lowers vertex `k`'s nearest distance to `d`.
 fn lower_to(nearest: &[AtomicU32], k: u32, d: f32) {
