@@ -6,7 +6,7 @@ use glam::Vec3;
 use super::forces::{ForceElements, ForceEnvironment};
 use crate::collision::body_contact::ContactBody;
 use crate::collision::coupling::PropCoupling;
-use crate::collision::motion_bounds::{ClothSurfaces, LayerContact, Surface};
+use crate::collision::motion_bounds::{ClothSurfaces, Surface};
 use crate::components::{Cloth, Collider, Particles, Prop, SelfCollision, SelfTouching, SolverWorkspace, Touching};
 use crate::resources::{ClothContacts, HealthProblem, HealthReport, IntegratorStats, SolverSettings, StepSettings};
 use crate::schedule::{SimSchedules, SubstepSystems};
@@ -61,9 +61,10 @@ pub fn integrate_cloths(
     if bounded {
         surfaces.clear();
         for (_, _, particles, (_, _, triangles, _, _, topology, _), .., self_collision, _) in &cloths {
-            if self_collision.is_some() {
+            if let Some(s) = self_collision {
                 let triangles = &triangles.indices;
-                surfaces.add(Surface { triangles, edges: topology.edges(triangles) }, &particles.position);
+                let surface = Surface { triangles, edges: topology.edges(triangles) };
+                surfaces.add(surface, s.layers(), &particles.position, &particles.velocity);
             }
         }
     }
@@ -120,7 +121,7 @@ pub fn integrate_cloths(
             model,
             free_inv_mass: &topology.free_inv_mass,
             scratch: forces,
-            self_collision: self_collision.map(|s| LayerContact { separation: s.separation, friction: s.friction }),
+            self_collision: self_collision.map(SelfCollision::layers),
             others: member.and_then(|m| surfaces.others(m)),
             contact_springs: self_touching.map_or(&mut [], |s| {
                 let SelfTouching { springs, across } = s.into_inner();
@@ -169,7 +170,7 @@ pub fn integrate_cloths(
         particles.position = x;
         particles.velocity = v;
         if let Some(member) = member {
-            surfaces.moved(member, &particles.position);
+            surfaces.moved(member, &particles.position, &particles.velocity);
         }
         if let Some(number) = mesh_number(entity).filter(|_| across) {
             ends.ended(number, &particles.position, &particles.velocity);

@@ -22,7 +22,8 @@
 //! half-space beyond that triangle's plane, grown by the layers' separation, as a vertex
 //! over a body keeps to the body's tangent plane ([`super::body_bounds`]): it may slide
 //! along the layer as far as its ball lets it, and the ball no longer counts the pairs the
-//! planes keep apart ([`Resting`]).
+//! planes keep apart ([`Resting`]). The other cloths' triangles stand still too, and give
+//! planes the same way ([`Under`]).
 
 use std::ops::Range;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
@@ -150,8 +151,10 @@ pub struct Surface<'a> {
 /// step, so that a warm step allocates nothing.
 #[derive(Debug, Default)]
 pub struct ClothSurfaces {
-    /// The cloths' vertices, one cloth after another.
+    /// The cloths' vertices, one cloth after another, and their velocities, which a
+    /// layer resting on one slides against.
     positions: Vec<Vec3>,
+    velocities: Vec<Vec3>,
     /// Their triangles and edges, numbered in `positions`.
     triangles: Vec<[u32; 3]>,
     edges: Vec<[u32; 2]>,
@@ -162,8 +165,11 @@ pub struct ClothSurfaces {
 
 /// One cloth of [`ClothSurfaces`]: where its vertices, triangles and edges begin and end
 /// there, and the trees over its triangles and edges, numbered from its first.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 struct SurfacePart {
+    /// How the cloth's layers meet: a pair with another cloth keeps the mean of the two
+    /// separations and takes the mean of their frictions, as the contact stage's do.
+    layers: LayerContact,
     vertices: Range<usize>,
     triangles: Range<usize>,
     edges: Range<usize>,
@@ -175,23 +181,40 @@ impl ClothSurfaces {
     /// Empties the surfaces, for the cloths to be added again in their order.
     pub fn clear(&mut self) {
         self.positions.clear();
+        self.velocities.clear();
         self.triangles.clear();
         self.edges.clear();
         self.count = 0;
     }
 
-    /// Adds a cloth's `surface` at `positions` after the cloths added since the last
-    /// [`ClothSurfaces::clear`], fitting its trees, and returns its number among them.
-    pub fn add(&mut self, surface: Surface<'_>, positions: &[Vec3]) -> usize {
+    /// Adds a cloth's `surface`, whose layers meet as `layers`, at `positions` moving at
+    /// `velocities`, after the cloths added since the last [`ClothSurfaces::clear`],
+    /// fitting its trees, and returns its number among them.
+    pub fn add(
+        &mut self,
+        surface: Surface<'_>,
+        layers: LayerContact,
+        positions: &[Vec3],
+        velocities: &[Vec3],
+    ) -> usize {
         let offset = self.positions.len() as u32;
         let (triangles, edges) = (self.triangles.len(), self.edges.len());
         self.triangles.extend(surface.triangles.iter().map(|t| t.map(|k| k + offset)));
         self.edges.extend(surface.edges.iter().map(|e| e.map(|k| k + offset)));
         self.positions.extend_from_slice(positions);
+        self.velocities.extend_from_slice(velocities);
         if self.parts.len() == self.count {
-            self.parts.push(SurfacePart::default());
+            self.parts.push(SurfacePart {
+                layers,
+                vertices: 0..0,
+                triangles: 0..0,
+                edges: 0..0,
+                triangle_tree: Bvh::default(),
+                edge_tree: Bvh::default(),
+            });
         }
         let part = &mut self.parts[self.count];
+        part.layers = layers;
         part.vertices = offset as usize..self.positions.len();
         part.triangles = triangles..self.triangles.len();
         part.edges = edges..self.edges.len();
@@ -200,10 +223,12 @@ impl ClothSurfaces {
         self.count - 1
     }
 
-    /// Moves cloth `cloth` to `positions`, where its step ended, and refits its trees.
-    pub fn moved(&mut self, cloth: usize, positions: &[Vec3]) {
+    /// Moves cloth `cloth` to `positions` and `velocities`, where its step ended, and
+    /// refits its trees.
+    pub fn moved(&mut self, cloth: usize, positions: &[Vec3], velocities: &[Vec3]) {
         let vertices = self.parts[cloth].vertices.clone();
-        self.positions[vertices].copy_from_slice(positions);
+        self.positions[vertices.clone()].copy_from_slice(positions);
+        self.velocities[vertices].copy_from_slice(velocities);
         self.refit(cloth);
     }
 
@@ -236,6 +261,55 @@ impl<'a> Others<'a> {
     fn parts(&self) -> impl Iterator<Item = &'a SurfacePart> + use<'a> {
         let own = self.own;
         self.surfaces.parts[..self.surfaces.count].iter().enumerate().filter(move |&(c, _)| c != own).map(|(_, p)| p)
+    }
+
+    /// The nearest of the other cloths' triangles that `p` lies over ([`lies_over`]),
+    /// if nearer than `limit`: its number in the surfaces and its distance, the lowest
+    /// number among equals.
+    fn under(&self, p: Vec3, limit: f32) -> Option<(u32, f32)> {
+        let point = Aabb::around([p]);
+        let mut nearest: Option<(u32, f32)> = None;
+        for part in self.parts() {
+            let tree = &part.triangle_tree;
+            tree.query(&point.inflated(limit), |t| {
+                let bound = nearest.map_or(limit, |(_, d)| d);
+                // A triangle whose box is farther than the nearest so far cannot be nearer.
+                if point.distance(&tree.aabb(t)) > bound {
+                    return;
+                }
+                let global = part.triangles.start as u32 + t;
+                let Some(d) = lies_over(p, self.corners(global)).filter(|&d| d < limit) else {
+                    return;
+                };
+                if nearest.is_none_or(|(u, e)| (d, global) < (e, u)) {
+                    nearest = Some((global, d));
+                }
+            });
+        }
+        nearest
+    }
+
+    /// The corners of another cloth's triangle `t`, in the surfaces' numbering.
+    fn corners(&self, t: u32) -> [Vec3; 3] {
+        self.surfaces.triangles[t as usize].map(|k| self.surfaces.positions[k as usize])
+    }
+
+    /// The velocity under weights `w` of another cloth's triangle `t`.
+    fn velocity(&self, t: u32, w: [f32; 3]) -> Vec3 {
+        let triangle = self.surfaces.triangles[t as usize];
+        (0..3).map(|k| w[k] * self.surfaces.velocities[triangle[k] as usize]).sum()
+    }
+
+    /// How the cloth's layers meet another cloth's triangle `t`: the mean of the two
+    /// cloths' separations and frictions.
+    fn layers(&self, t: u32) -> LayerContact {
+        let parts = &self.surfaces.parts[..self.surfaces.count];
+        let (own, theirs) = (parts[self.own].layers, parts.iter().find(|p| p.triangles.contains(&(t as usize))));
+        let theirs = theirs.map_or(own, |p| p.layers);
+        LayerContact {
+            separation: 0.5 * (own.separation + theirs.separation),
+            friction: 0.5 * (own.friction + theirs.friction),
+        }
     }
 }
 
@@ -280,9 +354,9 @@ impl MotionBounds {
     ///
     /// With `others`, the pairs with the other cloths' triangles and edges, which stand
     /// still, bound the vertices too. With `resting`, a free vertex over a still triangle
-    /// keeps to that triangle's plane ([`MotionBounds::planes`]), and the pairs with one
-    /// side still that the planes keep apart ([`MotionBounds::guarded`]) no longer shrink
-    /// the balls.
+    /// (its cloth's own or another cloth's) keeps to that triangle's plane
+    /// ([`MotionBounds::planes`]), and the pairs with one side still that the planes keep
+    /// apart ([`guarded`]) no longer shrink the balls.
     pub fn compute(
         &mut self,
         surface: Surface<'_>,
@@ -293,8 +367,8 @@ impl MotionBounds {
         bounds: &mut [Bound],
     ) {
         let Surface { triangles, edges } = surface;
-        // Without a still vertex there is no pair to leave to the planes.
-        let resting = resting.filter(|r| r.mobility.contains(&Mobility::Still));
+        // Without a still vertex or another cloth there is no pair to leave to the planes.
+        let resting = resting.filter(|r| others.is_some() || r.mobility.contains(&Mobility::Still));
         let edge = if edges.is_empty() {
             0.0
         } else {
@@ -320,14 +394,20 @@ impl MotionBounds {
         let Self { triangle_tree, edge_tree, nearest, support, vertices_left, edges_left, .. } = self;
         let (triangle_tree, edge_tree, nearest, support) = (&*triangle_tree, &*edge_tree, &*nearest, &*support);
         let lower = |k: u32, d: f32| lower_to(nearest, k, d);
+        // Vertex `v` lies over still triangle `t` ([`Under::of`] numbers them) at distance `d`.
+        let rest_on = |v: u32, t: u32, d: f32| {
+            support[v as usize].fetch_min(u64::from(d.to_bits()) << 32 | u64::from(t), Ordering::Relaxed);
+        };
+        let theirs = others.filter(|_| resting.is_some());
         // A pair can lower no vertex's distance once it is at least the largest of its
         // vertices' distances so far, which only fall: skipping it where its boxes' gap
         // says so leaves every minimum, and so the bounds, as they were.
         let farthest = |vertices: &[u32]| farthest_in(nearest, vertices);
         let point_triangle = |p: Vec3, triangle: [u32; 3]| triangle_distance(p, triangle.map(|k| x[k as usize]));
         // Each vertex against the triangles around it; a free vertex's pairs with still
-        // triangles are where it looks for the one it lies over. Each says whether it
-        // left a pair with one side still to the planes' pass, and so does each edge.
+        // triangles, its own cloth's and the other cloths', are where it looks for the one
+        // it lies over. Each says whether it left a pair with one side still to the
+        // planes' pass, and so does each edge.
         (0..x.len() as u32)
             .into_par_iter()
             .with_min_len(PARALLEL_MIN_LEN)
@@ -344,11 +424,8 @@ impl MotionBounds {
                     if one_side_still(&[v], &triangle) {
                         left = true;
                         if mobility(v) == Mobility::Free && point.distance(&triangle_tree.aabb(t)) < reach {
-                            let (d, (_, _, height)) = (point_triangle(p, triangle), over(triangle, x, p));
-                            if d < reach && height > 0.0 && height >= OVER * d {
-                                support[v as usize]
-                                    .fetch_min(u64::from(d.to_bits()) << 32 | u64::from(t), Ordering::Relaxed);
-                            }
+                            let over = lies_over(p, triangle.map(|k| x[k as usize])).filter(|&d| d < reach);
+                            over.into_iter().for_each(|d| rest_on(v, t, d));
                         }
                         return;
                     }
@@ -362,10 +439,24 @@ impl MotionBounds {
                     }
                 });
                 lower(v, own);
+                if let Some(others) = theirs.filter(|_| mobility(v) == Mobility::Free) {
+                    // Only this iteration sets `v`'s support: the nearest still triangle of
+                    // its own cloth so far bounds the search. So does its nearest pair: a
+                    // plane on a triangle farther than that would loosen nothing.
+                    let still = supporting(&support[v as usize]).map(|_| support[v as usize].load(Ordering::Relaxed));
+                    let limit = still.map_or(own, |s| f32::from_bits((s >> 32) as u32).min(own));
+                    if let Some((t, d)) = others.under(p, limit) {
+                        rest_on(v, Under::theirs(t, triangles), d);
+                    }
+                }
                 left
             })
             .collect_into_vec(vertices_left);
-        // Each edge against the edges after it.
+        // Each edge against the edges near it, both ways round: each visit lowers only its
+        // own edge's vertices, so it looks no farther than their nearest pairs so far,
+        // which the vertices' pass has mostly found, where a visit for all four vertices
+        // would look as far as the reach. A pair's distance is measured with its
+        // lower-numbered edge first, so that both visits give the same bits.
         (0..edges.len() as u32)
             .into_par_iter()
             .with_min_len(PARALLEL_MIN_LEN)
@@ -379,13 +470,14 @@ impl MotionBounds {
                         return;
                     }
                     if one_side_still(&[a, b], &[c, d]) {
+                        // The planes' pass visits each such pair from its lower edge.
                         left = true;
                         return;
                     }
                     if own.distance(&edge_tree.aabb(f)) >= farthest(&[a, b, c, d]) {
                         return;
                     }
-                    let distance = edge_edge(x, [a, b], [c, d]);
+                    let distance = if e < f { edge_edge(x, [a, b], [c, d]) } else { edge_edge(x, [c, d], [a, b]) };
                     if distance < reach {
                         [a, b, c, d].into_iter().for_each(|k| lower(k, distance));
                     }
@@ -394,12 +486,17 @@ impl MotionBounds {
             })
             .collect_into_vec(edges_left);
         if let Some(resting) = resting {
-            self.planes(triangles, x, resting.separation);
+            self.planes(triangles, x, others, resting.separation);
             self.guard(surface, resting, x, reach);
         } else {
             self.supported = false;
         }
-        let Self { nearest, .. } = &*self;
+        let Self { nearest, planes, .. } = &*self;
+        // A pair with another cloth, which stands still, that the planes keep apart
+        // ([`guarded`]) bounds no ball.
+        let planed = resting.is_some() && self.supported;
+        let slack = resting.map_or(0.0, |r| SLACK * r.separation);
+        let kept = |moving: &[u32], still: &[Vec3]| planed && guarded(planes, x, moving, still, GAMMA * reach, slack);
         if let Some(others) = others {
             let lower = |k: u32, d: f32| lower_to(nearest, k, d);
             let farthest = |vertices: &[u32]| farthest_in(nearest, vertices);
@@ -418,7 +515,11 @@ impl MotionBounds {
                         if point.distance(&tree.aabb(t)) >= own {
                             return;
                         }
-                        own = own.min(triangle_distance(p, their_triangles[t as usize].map(|k| y[k as usize])));
+                        let corners = their_triangles[t as usize].map(|k| y[k as usize]);
+                        let d = triangle_distance(p, corners);
+                        if d < own && !kept(&[v], &corners) {
+                            own = d;
+                        }
                     });
                 }
                 lower(v, own);
@@ -433,7 +534,9 @@ impl MotionBounds {
                             return;
                         }
                         let d = triangle_distance(p, triangle.map(|k| x[k as usize]));
-                        triangle.iter().for_each(|&k| lower(k, d));
+                        if !kept(&triangle, &[p]) {
+                            triangle.iter().for_each(|&k| lower(k, d));
+                        }
                     });
                 });
             }
@@ -451,12 +554,13 @@ impl MotionBounds {
                         let [pc, pd] = their_edges[f as usize].map(|k| y[k as usize]);
                         let (s, t) = closest_between_segments(pa, pb, pc, pd);
                         let distance = (pa + s * (pb - pa)).distance(pc + t * (pd - pc));
-                        [a, b].into_iter().for_each(|k| lower(k, distance));
+                        if !kept(&[a, b], &[pc, pd]) {
+                            [a, b].into_iter().for_each(|k| lower(k, distance));
+                        }
                     });
                 }
             });
         }
-        let (planes, slack) = (&self.planes, resting.map_or(0.0, |r| SLACK * r.separation));
         bounds.par_iter_mut().zip(nearest.par_iter()).enumerate().with_min_len(PARALLEL_MIN_LEN).for_each(
             |(v, (bound, d))| {
                 *bound = Bound::within(GAMMA * f32::from_bits(d.load(Ordering::Relaxed)));
@@ -469,20 +573,25 @@ impl MotionBounds {
     }
 
     /// Sets each free vertex's plane from the still triangle it lies over, if any: the
-    /// triangle's plane, on the vertex's side, grown by `separation` less the slack, or
-    /// through the vertex where it is nearer than that, so that measuring again never lets
-    /// it closer (as a body's plane is placed, [`super::body_bounds`]).
-    fn planes(&mut self, triangles: &[[u32; 3]], x: &[Vec3], separation: f32) {
+    /// triangle's plane, on the vertex's side, grown by the separation (`separation`, or
+    /// with another cloth the two cloths' mean) less the slack, or through the vertex
+    /// where it is nearer than that, so that measuring again never lets it closer (as a
+    /// body's plane is placed, [`super::body_bounds`]).
+    fn planes(&mut self, triangles: &[[u32; 3]], x: &[Vec3], others: Option<Others<'_>>, separation: f32) {
         let slack = SLACK * separation;
         let Self { support, planes, .. } = self;
         planes.resize(x.len(), Vec4::ZERO);
         planes.par_iter_mut().zip(support.par_iter()).enumerate().with_min_len(PARALLEL_MIN_LEN).for_each(
             |(v, (plane, s))| {
-                *plane = match supporting(s) {
+                *plane = match supporting(s).and_then(|t| Under::of(t, triangles, others)) {
                     None => Vec4::ZERO,
-                    Some(t) => {
-                        let (p, normal, height) = over(triangles[t as usize], x, x[v]);
-                        normal.extend(normal.dot(p) - (height - separation + slack).max(0.0))
+                    Some(under) => {
+                        let (corners, separation) = match under {
+                            Under::Own(t) => (triangles[t as usize].map(|k| x[k as usize]), separation),
+                            Under::Theirs(others, t) => (others.corners(t), others.layers(t).separation),
+                        };
+                        let (normal, height) = over(corners, x[v]);
+                        normal.extend(normal.dot(x[v]) - (height - separation + slack).max(0.0))
                     }
                 };
             },
@@ -500,9 +609,10 @@ impl MotionBounds {
         let all_still = |vertices: &[u32]| vertices.iter().all(|&k| still(k));
         let lower = |k: u32, d: f32| lower_to(nearest, k, d);
         let farthest = |vertices: &[u32]| farthest_in(nearest, vertices);
-        let kept = |moving: &[u32], still: &[u32]| {
+        let kept = |moving: &[u32], still: &[Vec3]| {
             self.supported && guarded(planes, x, moving, still, GAMMA * reach, SLACK * resting.separation)
         };
+        let at = |k: u32| x[k as usize];
         let vertices = (0..x.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN);
         vertices.filter(|&v| vertices_left[v as usize]).for_each(|v| {
             let p = x[v as usize];
@@ -517,7 +627,7 @@ impl MotionBounds {
                     return;
                 }
                 let d = triangle_distance(p, triangle.map(|k| x[k as usize]));
-                let apart = || if v_still { kept(&triangle, &[v]) } else { kept(&[v], &triangle) };
+                let apart = || if v_still { kept(&triangle, &[p]) } else { kept(&[v], &triangle.map(at)) };
                 if d < reach && !apart() {
                     [v, triangle[0], triangle[1], triangle[2]].into_iter().for_each(|k| lower(k, d));
                 }
@@ -538,7 +648,7 @@ impl MotionBounds {
                     return;
                 }
                 let distance = edge_edge(x, [a, b], [c, d]);
-                let apart = || if e_still { kept(&[c, d], &[a, b]) } else { kept(&[a, b], &[c, d]) };
+                let apart = || if e_still { kept(&[c, d], &[at(a), at(b)]) } else { kept(&[a, b], &[at(c), at(d)]) };
                 if distance < reach && !apart() {
                     [a, b, c, d].into_iter().for_each(|k| lower(k, distance));
                 }
@@ -552,13 +662,16 @@ impl MotionBounds {
     }
 
     /// The still triangle vertex `i`, at `end[i]`, rests on, of those the planes of the
-    /// last call stood on: one whose plane it lies beyond by no more than the layers'
-    /// separation (and what the contact stage lets pass as round-off). Its normal towards
-    /// the vertex, its velocity under the vertex (its vertices' moves from `start` over
-    /// `h`) and the layers' friction.
+    /// last call stood on (the cloth's own `triangles`, or those of the `others` the call
+    /// was given): one whose plane it lies beyond by no more than the layers' separation
+    /// (and what the contact stage lets pass as round-off). Its normal towards the vertex,
+    /// its velocity under the vertex (an own triangle's vertices' moves from `start` over
+    /// `h`, another cloth's velocities) and the layers' friction.
+    #[allow(clippy::too_many_arguments)]
     pub fn resting_on(
         &self,
         triangles: &[[u32; 3]],
+        others: Option<Others<'_>>,
         layers: LayerContact,
         i: usize,
         end: &[Vec3],
@@ -566,15 +679,24 @@ impl MotionBounds {
         h: f32,
     ) -> Option<(Vec3, Vec3, f32)> {
         let t = supporting(self.support.get(i).filter(|_| self.supported)?)?;
-        let triangle = triangles[t as usize];
-        let (_, normal, height) = over(triangle, end, end[i]);
+        let under = Under::of(t, triangles, others)?;
+        let (corners, layers) = match under {
+            Under::Own(t) => (triangles[t as usize].map(|k| end[k as usize]), layers),
+            Under::Theirs(others, t) => (others.corners(t), others.layers(t)),
+        };
+        let (normal, height) = over(corners, end[i]);
         if height <= 0.0 || height > layers.separation * (1.0 + CAUGHT) {
             return None;
         }
-        let [a, b, c] = triangle.map(|k| end[k as usize]);
+        let [a, b, c] = corners;
         let w = closest_on_triangle(end[i], a, b, c);
-        let velocity =
-            (0..3).map(|k| w[k] * (end[triangle[k] as usize] - start[triangle[k] as usize])).sum::<Vec3>() / h;
+        let velocity = match under {
+            Under::Own(t) => {
+                let triangle = triangles[t as usize];
+                (0..3).map(|k| w[k] * (end[triangle[k] as usize] - start[triangle[k] as usize])).sum::<Vec3>() / h
+            }
+            Under::Theirs(others, t) => others.velocity(t, w),
+        };
         Some((normal, velocity, layers.friction))
     }
 }
@@ -606,13 +728,43 @@ fn supporting(support: &AtomicU64) -> Option<u32> {
     (s != NO_SUPPORT).then_some((s & u64::from(u32::MAX)) as u32)
 }
 
-/// Triangle `triangle` at `x` seen from `p`: `p`, the triangle's unit normal on `p`'s
-/// side, and `p`'s height above the triangle's plane.
-fn over(triangle: [u32; 3], x: &[Vec3], p: Vec3) -> (Vec3, Vec3, f32) {
-    let [a, b, c] = triangle.map(|k| x[k as usize]);
+/// The triangle with corners `corners` seen from `p`: its unit normal on `p`'s side, and
+/// `p`'s height above its plane.
+fn over(corners: [Vec3; 3], p: Vec3) -> (Vec3, f32) {
+    let [a, b, c] = corners;
     let normal = (b - a).cross(c - a).normalize_or_zero();
     let height = normal.dot(p - a);
-    if height < 0.0 { (p, -normal, -height) } else { (p, normal, height) }
+    if height < 0.0 { (-normal, -height) } else { (normal, height) }
+}
+
+/// `p`'s distance from the triangle with corners `corners` where `p` lies over it: its
+/// height above the triangle's plane at least [`OVER`] of that distance.
+fn lies_over(p: Vec3, corners: [Vec3; 3]) -> Option<f32> {
+    let (d, (_, height)) = (triangle_distance(p, corners), over(corners, p));
+    (height > 0.0 && height >= OVER * d).then_some(d)
+}
+
+/// A still triangle that a vertex's support names ([`MotionBounds::support`]).
+#[derive(Debug, Clone, Copy)]
+enum Under<'a> {
+    /// The cloth's own triangle, numbered below its triangles' count.
+    Own(u32),
+    /// Another cloth's, numbered after them by its number in the surfaces.
+    Theirs(Others<'a>, u32),
+}
+
+impl<'a> Under<'a> {
+    /// The triangle support number `t` names, of the cloth's `triangles` or the
+    /// `others`'; `None` for another cloth's without them.
+    fn of(t: u32, triangles: &[[u32; 3]], others: Option<Others<'a>>) -> Option<Self> {
+        let own = triangles.len() as u32;
+        if t < own { Some(Self::Own(t)) } else { others.map(|others| Self::Theirs(others, t - own)) }
+    }
+
+    /// The support number of another cloth's triangle `t` (in the surfaces' numbering).
+    fn theirs(t: u32, triangles: &[[u32; 3]]) -> u32 {
+        triangles.len() as u32 + t
+    }
 }
 
 /// The distance between edges `e` and `f` at `x`.
@@ -623,7 +775,7 @@ fn edge_edge(x: &[Vec3], e: [u32; 2], f: [u32; 2]) -> f32 {
 }
 
 /// Whether the planes keep the `moving` vertices, at `x` where their bounds are measured,
-/// off the `still` ones whatever they do within their bounds: every moving vertex has a
+/// off the `still` points whatever they do within their bounds: every moving vertex has a
 /// plane, and the first one's plane has the still vertices behind it by more than
 /// `tolerance`, and every moving vertex ahead of it. Each vertex `u` keeps to its own
 /// plane, `n_u · y ≥ w_u`, and within `travel` of `x_u`, so along the first's normal `n`,
@@ -632,7 +784,7 @@ fn edge_edge(x: &[Vec3], e: [u32; 2], f: [u32; 2]) -> f32 {
 /// these. On a flat still layer the planes agree to round-off and the test holds with the
 /// whole gap to spare; where they disagree by more than the gap over a move, it fails,
 /// and the pair bounds the balls.
-fn guarded(planes: &[Vec4], x: &[Vec3], moving: &[u32], still: &[u32], travel: f32, tolerance: f32) -> bool {
+fn guarded(planes: &[Vec4], x: &[Vec3], moving: &[u32], still: &[Vec3], travel: f32, tolerance: f32) -> bool {
     let first = planes[moving[0] as usize];
     if moving.iter().any(|&u| planes[u as usize] == Vec4::ZERO) {
         return false;
@@ -646,7 +798,7 @@ fn guarded(planes: &[Vec4], x: &[Vec3], moving: &[u32], still: &[u32], travel: f
             (plane.w - w) + tilt.dot(x[u as usize]) - tilt.length() * travel
         })
         .fold(f32::INFINITY, f32::min);
-    let behind = still.iter().map(|&q| normal.dot(x[q as usize]) - w).fold(f32::NEG_INFINITY, f32::max);
+    let behind = still.iter().map(|&q| normal.dot(q) - w).fold(f32::NEG_INFINITY, f32::max);
     behind < ahead - tolerance
 }
 
@@ -766,8 +918,9 @@ pub(crate) mod tests {
         let (x_lower, x_upper) = x.split_at(36);
         let mut surfaces = ClothSurfaces::default();
         surfaces.clear();
-        surfaces.add(Surface { triangles: lower, edges: &lower_edges }, x_lower);
-        let own = surfaces.add(Surface { triangles: &upper, edges: &upper_edges }, x_upper);
+        let (layers, still) = (LayerContact { separation: 0.002, friction: 0.3 }, [Vec3::ZERO; 36]);
+        surfaces.add(Surface { triangles: lower, edges: &lower_edges }, layers, x_lower, &still);
+        let own = surfaces.add(Surface { triangles: &upper, edges: &upper_edges }, layers, x_upper, &still);
         assert!(surfaces.others(own).is_some());
         let surface = Surface { triangles: &upper, edges: &upper_edges };
         let mut motion = MotionBounds::default();
@@ -794,23 +947,75 @@ pub(crate) mod tests {
         }
         // The lower cloth moved away loosens the bounds.
         let away: Vec<Vec3> = x_lower.iter().map(|p| *p - 0.01 * Vec3::Y).collect();
-        surfaces.moved(0, &away);
+        surfaces.moved(0, &away, &still);
         let mut looser = vec![Bound::FREE; 36];
         motion.compute(surface, surfaces.others(own), None, x_upper, 1.0, &mut looser);
         assert_eq!(looser, alone);
     }
 
+    /// The two layers of [`two_layers`], the lower one smoothed to a tenth of its
+    /// roughness (±0.075 mm), the upper one 1.5 mm lower, 2.5 ± 0.75 mm up: within reach
+    /// of its balls.
+    fn a_layer_over_a_smooth_one(rng: &mut Lcg) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let (mut x, triangles) = two_layers(rng);
+        x[..36].iter_mut().for_each(|p| p.y *= 0.1);
+        x[36..].iter_mut().for_each(|p| p.y -= 0.0015);
+        (x, triangles)
+    }
+
+    /// Checks the bounds `upper` of the upper layer of [`a_layer_over_a_smooth_one`] at
+    /// `x0`, measured with the lower one still and a 2 mm separation, against `balls`,
+    /// measured without the planes; returns the upper vertices (numbered from 0) given a
+    /// plane. Those over the lower layer's middle keep to a plane at 2 mm, and their balls
+    /// are set by their own sheet, its nearest diagonal 7 mm away, where without the
+    /// planes every ball is 0.4 of the gap. Every upper vertex moving as far as its bound
+    /// lets it (along the layer, down into it or anywhere, its move cut at its plane)
+    /// crosses nothing; the same moves down past the planes cross.
+    fn planes_hold(x0: &[Vec3], triangles: &[[u32; 3]], upper: &[Bound], balls: &[Bound], rng: &mut Lcg) -> Vec<usize> {
+        assert!(balls.iter().all(|b| b.radius <= GAMMA * 0.0035 + 1e-6));
+        let planed: Vec<usize> = (0..36).filter(|&i| upper[i].plane != Vec4::ZERO).collect();
+        let loosened = planed.iter().filter(|&&i| upper[i].radius > GAMMA * 0.0065).count();
+        assert!(planed.len() >= 16 && loosened >= 8, "{} planes, {loosened} balls loosened", planed.len());
+        for &i in &planed {
+            let room = upper[i].room(x0[36 + i]);
+            assert!((0.0..0.002).contains(&room), "vertex {i}: {room} m beyond its plane");
+        }
+        let edges = ContactMesh::edges_of(triangles);
+        let moved = |bounds: &[Bound], direction: &mut dyn FnMut() -> Vec3| -> Vec<Vec3> {
+            let lower = x0[..36].iter().copied();
+            lower
+                .chain(x0[36..].iter().zip(bounds).map(|(&p, b)| {
+                    let step = b.radius * direction();
+                    p + b.plane_allows(p, step) * step
+                }))
+                .collect()
+        };
+        for trial in 0..30 {
+            let x1 = match trial % 3 {
+                0 => moved(upper, &mut || -Vec3::Y),
+                1 => {
+                    let along = rng.direction().with_y(-0.2).normalize();
+                    moved(upper, &mut || along)
+                }
+                _ => moved(upper, &mut || rng.direction()),
+            };
+            assert!(!any_crossing(triangles, &edges, x0, &x1), "trial {trial} crossed");
+        }
+        // The planes do the holding: many balls reach past them. And the check can fail.
+        assert!(planed.iter().filter(|&&i| upper[i].radius > upper[i].room(x0[36 + i])).count() >= 8);
+        let through = moved(&upper.iter().map(|b| Bound::within(b.radius)).collect::<Vec<_>>(), &mut || -Vec3::Y);
+        assert!(any_crossing(triangles, &edges, x0, &through));
+        planed
+    }
+
     #[test]
     fn a_layer_over_a_still_layer_keeps_to_its_planes_and_slides_past_its_balls() {
-        // The two layers, the lower one smoothed to a tenth of its roughness (±0.075 mm)
-        // and still (pinned): each upper vertex keeps to the plane of the lower triangle
-        // under it, grown by a 2 mm separation. (Over the crumpled one, whose triangles'
-        // planes differ by a tenth of a radian, most pairs fail the planes' test.)
+        // The lower layer still (pinned): each upper vertex keeps to the plane of the
+        // lower triangle under it. (Over the crumpled one of `two_layers`, whose
+        // triangles' planes differ by a tenth of a radian, most pairs fail the planes'
+        // test.)
         let mut rng = Lcg(5);
-        let (mut x0, triangles) = two_layers(&mut rng);
-        x0[..36].iter_mut().for_each(|p| p.y *= 0.1);
-        // The upper one 1.5 mm lower, 2.5 ± 0.75 mm up: within reach of its balls.
-        x0[36..].iter_mut().for_each(|p| p.y -= 0.0015);
+        let (x0, triangles) = a_layer_over_a_smooth_one(&mut rng);
         let edges = ContactMesh::edges_of(&triangles);
         let surface = Surface { triangles: &triangles, edges: &edges };
         let mobility: Vec<Mobility> = (0..72).map(|i| if i < 36 { Mobility::Still } else { Mobility::Free }).collect();
@@ -820,57 +1025,56 @@ pub(crate) mod tests {
         motion.compute(surface, None, None, &x0, 1.0, &mut balls);
         motion.compute(surface, None, Some(resting), &x0, 1.0, &mut bounds);
         assert!(motion.supported());
-        // Without the planes every upper ball is 0.4 of the gap; with them,
-        // those over the lower layer's middle keep to a plane at 2 mm, and their balls are
-        // set by their own sheet, its nearest diagonal 7 mm away.
-        assert!(balls[36..].iter().all(|b| b.radius <= GAMMA * 0.0035 + 1e-6));
-        let planed: Vec<usize> = (36..72).filter(|&i| bounds[i].plane != Vec4::ZERO).collect();
-        let loosened = planed.iter().filter(|&&i| bounds[i].radius > GAMMA * 0.0065).count();
-        assert!(planed.len() >= 16 && loosened >= 8, "{} planes, {loosened} balls loosened", planed.len());
-        for &i in &planed {
-            let room = bounds[i].room(x0[i]);
-            assert!((0.0..0.002).contains(&room), "vertex {i}: {room} m beyond its plane");
-        }
-        // Every upper vertex moves as far as its bound lets it, along the layer, down
-        // into it or anywhere, its move cut at its plane: nothing crosses.
-        let moved = |bounds: &[Bound], direction: &mut dyn FnMut() -> Vec3| -> Vec<Vec3> {
-            (0..72)
-                .map(|i| {
-                    let (p, b) = (x0[i], bounds[i]);
-                    if i < 36 {
-                        return p;
-                    }
-                    let step = b.radius * direction();
-                    p + b.plane_allows(p, step) * step
-                })
-                .collect()
-        };
-        for trial in 0..30 {
-            let x1 = match trial % 3 {
-                0 => moved(&bounds, &mut || -Vec3::Y),
-                1 => {
-                    let along = rng.direction().with_y(-0.2).normalize();
-                    moved(&bounds, &mut || along)
-                }
-                _ => moved(&bounds, &mut || rng.direction()),
-            };
-            assert!(!any_crossing(&triangles, &edges, &x0, &x1), "trial {trial} crossed");
-        }
-        // The planes do the holding: many balls reach past them. And the check can fail:
-        // the same moves down, past the planes, cross.
-        assert!(planed.iter().filter(|&&i| bounds[i].radius > bounds[i].room(x0[i])).count() >= 8);
-        let through = moved(&bounds.iter().map(|b| Bound::within(b.radius)).collect::<Vec<_>>(), &mut || -Vec3::Y);
-        assert!(any_crossing(&triangles, &edges, &x0, &through));
+        let planed = planes_hold(&x0, &triangles, &bounds[36..], &balls[36..], &mut rng);
         // The friction's support: an upper vertex on its plane rests on the layer, one
         // lifted away does not.
         let layers = LayerContact { separation: 0.002, friction: 0.3 };
-        let i = planed[0];
+        let i = 36 + planed[0];
         let mut end = x0.clone();
         end[i] -= bounds[i].room(x0[i]) * bounds[i].plane.truncate();
-        let (normal, velocity, friction) = motion.resting_on(&triangles, layers, i, &end, &x0, 0.01).expect("rests");
+        let resting_on = |end: &[Vec3]| motion.resting_on(&triangles, None, layers, i, end, &x0, 0.01);
+        let (normal, velocity, friction) = resting_on(&end).expect("rests");
         assert!(normal.y > 0.9 && velocity == Vec3::ZERO && friction == 0.3, "{normal} {velocity}");
         end[i] += 0.01 * Vec3::Y;
-        assert!(motion.resting_on(&triangles, layers, i, &end, &x0, 0.01).is_none());
+        assert!(resting_on(&end).is_none());
+    }
+
+    #[test]
+    fn a_cloth_over_another_standing_still_keeps_to_its_planes_and_slides_past_its_balls() {
+        // The same layers as two cloths, the lower one standing still while the upper one,
+        // all of it free, is solved: the lower cloth's triangles give the planes.
+        let mut rng = Lcg(5);
+        let (x0, triangles) = a_layer_over_a_smooth_one(&mut rng);
+        let (lower, upper) = triangles.split_at(triangles.len() / 2);
+        let upper: Vec<[u32; 3]> = upper.iter().map(|t| t.map(|k| k - 36)).collect();
+        let (lower_edges, upper_edges) = (ContactMesh::edges_of(lower), ContactMesh::edges_of(&upper));
+        let (x_lower, x_upper) = x0.split_at(36);
+        // The lower cloth drifts at 0.1 m/s, with more friction than the upper one.
+        let drift = [Vec3::new(0.1, 0.0, 0.0); 36];
+        let (own, theirs) =
+            (LayerContact { separation: 0.002, friction: 0.3 }, LayerContact { separation: 0.002, friction: 0.5 });
+        let mut surfaces = ClothSurfaces::default();
+        surfaces.add(Surface { triangles: lower, edges: &lower_edges }, theirs, x_lower, &drift);
+        let cloth = surfaces.add(Surface { triangles: &upper, edges: &upper_edges }, own, x_upper, &[Vec3::ZERO; 36]);
+        let surface = Surface { triangles: &upper, edges: &upper_edges };
+        let mobility = [Mobility::Free; 36];
+        let resting = Resting { mobility: &mobility, separation: 0.002 };
+        let (mut balls, mut bounds) = (vec![Bound::FREE; 36], vec![Bound::FREE; 36]);
+        let mut motion = MotionBounds::default();
+        let others = surfaces.others(cloth);
+        motion.compute(surface, others, None, x_upper, 1.0, &mut balls);
+        motion.compute(surface, others, Some(resting), x_upper, 1.0, &mut bounds);
+        assert!(motion.supported());
+        let planed = planes_hold(&x0, &triangles, &bounds, &balls, &mut rng);
+        // It rests on the lower cloth, sliding against its drift, with the mean friction.
+        let i = planed[0];
+        let mut end = x_upper.to_vec();
+        end[i] -= bounds[i].room(x_upper[i]) * bounds[i].plane.truncate();
+        let resting_on = |end: &[Vec3]| motion.resting_on(&upper, others, own, i, end, x_upper, 0.01);
+        let (normal, velocity, friction) = resting_on(&end).expect("rests");
+        assert!(normal.y > 0.9 && (velocity - drift[0]).length() < 1e-6 && friction == 0.4, "{normal} {velocity}");
+        end[i] += 0.01 * Vec3::Y;
+        assert!(resting_on(&end).is_none());
     }
 
     #[test]

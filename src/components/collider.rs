@@ -8,6 +8,7 @@ use parry3d::shape::SharedShape;
 use crate::collision::body_contact::{ContactBody, ContactTotals, Touch};
 use crate::collision::collider::{ColliderMotion, ContactResponse};
 use crate::collision::features::SharpFeatures;
+use crate::collision::motion_bounds::LayerContact;
 use crate::solver::contact_springs::{Across, ContactSpring};
 
 /// A static or kinematic solid body (E5, D11, B5): a parry3d shape that moves along its
@@ -111,4 +112,11 @@ pub struct SelfCollision {
     /// Layer number: where cloths intersect, a higher layer is untangled onto the side a
     /// lower layer's triangle normals point to.
     pub layer: u32,
+}
+
+impl SelfCollision {
+    /// How the cloth's layers meet, as the solver reads it.
+    pub fn layers(&self) -> LayerContact {
+        LayerContact { separation: self.separation, friction: self.friction }
+    }
 }

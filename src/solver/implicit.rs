@@ -890,7 +890,7 @@ fn push_friction(
     h: f32,
     ws: &mut ImplicitWorkspace,
 ) {
-    let bodies = dynamics.contact_bodies();
+    let (bodies, others) = (dynamics.contact_bodies(), dynamics.contact_others());
     let layers = dynamics.layer_contact().zip(dynamics.contact_surface()).filter(|_| ws.motion_bounds.supported());
     if bodies.is_empty() && layers.is_none() {
         return;
@@ -903,8 +903,10 @@ fn push_friction(
         if !filter.is_free(i) {
             return;
         }
-        let on_layer =
-            || layers.and_then(|(layers, surface)| motion_bounds.resting_on(surface.triangles, layers, i, end, x, h));
+        let on_layer = || {
+            layers
+                .and_then(|(layers, surface)| motion_bounds.resting_on(surface.triangles, others, layers, i, end, x, h))
+        };
         let Some((normal, velocity, friction)) = body_bounds::resting_on(bodies, end[i]).or_else(on_layer) else {
             return;
         };
