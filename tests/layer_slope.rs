@@ -132,10 +132,13 @@ fn without_friction_a_layer_slides_on_a_layer_at_g_sin_30_under_block_descent_at
 /// along the plane it rests on (`solver::floating`): 4.9058 at 2 steps, 4.9003 at 10
 /// (2 December 2026). A cloth on another, which stands still while it is solved, keeps to
 /// the other's planes the same way: 4.9123 and 4.9023, where with balls alone it slid at
-/// 0.11 and 2.62 m/s² (2 December 2026).
+/// 0.11 and 2.62 m/s² (2 December 2026). At one step a frame the anchor's advance held it
+/// back (a 40 mm slide a step against balls of 7 mm, set by its own sheet), 2.58 and 2.39
+/// m/s², until it advanced while each move gained a tenth for a piece resting whole on
+/// planes: 4.9236 and 4.9254 (2 December 2026).
 #[test]
-fn without_friction_a_layer_slides_on_a_layer_at_g_sin_30_under_block_descent_at_2_and_10_steps_a_frame() {
-    for (name, steps) in [ONE_CLOTH, TWO_CLOTHS].into_iter().flat_map(|name| [(name, 2), (name, 10)]) {
+fn without_friction_a_layer_slides_on_a_layer_at_g_sin_30_under_block_descent_at_1_2_and_10_steps_a_frame() {
+    for (name, steps) in [ONE_CLOTH, TWO_CLOTHS].into_iter().flat_map(|name| [(name, 1), (name, 2), (name, 10)]) {
         let (measured, expected) = (acceleration_of(block_descent(name, 0.0, steps)), G * 0.5);
         let within = (measured - expected).abs() < 0.02 * expected;
         assert!(within, "{name}, {steps} steps: {measured} m/s², expected {expected}");

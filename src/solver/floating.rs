@@ -52,6 +52,8 @@ pub struct FloatingPieces {
     sums: Vec<(DMat3, DVec3, f32)>,
     /// Per piece, the sum of its particles' planes' normals.
     normals: Vec<DVec3>,
+    /// Per piece, whether every particle of it keeps to a plane.
+    resting: Vec<bool>,
     /// Per particle of a piece, its column's sum `Σ_i A_ij`, summed in double precision:
     /// a piece's residual sum is `Σ_j (rhs_j − (Σ_i A_ij) delta_j)`, one product a
     /// particle rather than a row's.
@@ -106,6 +108,19 @@ impl FloatingPieces {
             // The symmetric matrix's column `i` is its row `i` transposed.
             self.columns[i] = row.transpose().as_mat3();
         }
+    }
+
+    /// Whether every particle that `cut` picks belongs to a floating piece of which every
+    /// particle keeps to a plane (`on_plane`): a piece resting whole on a layer or a body,
+    /// whose gap does not shrink as it slides. Uses the pieces of the last
+    /// [`FloatingPieces::find`].
+    pub fn cut_only_where_resting(&mut self, on_plane: impl Fn(usize) -> bool, cut: impl Fn(usize) -> bool) -> bool {
+        self.resting.clear();
+        self.resting.resize(self.sums.len(), true);
+        for (i, &p) in self.piece.iter().enumerate().filter(|(_, p)| **p != NONE) {
+            self.resting[p as usize] &= on_plane(i);
+        }
+        self.piece.iter().enumerate().all(|(i, &p)| !cut(i) || (p != NONE && self.resting[p as usize]))
     }
 
     /// Adds to `delta` each floating piece's translation that minimises the energy of
@@ -243,5 +258,24 @@ mod tests {
         for d in &delta[0..3] {
             assert!((*d - 0.5 * expected).length() < 1e-3 * expected.length(), "the loose chain moves by {d}");
         }
+    }
+
+    #[test]
+    fn only_particles_of_a_loose_piece_resting_whole_on_planes_count_as_sliding() {
+        let (pattern, matrix) = two_chains(1e-3, 10.0);
+        let mut filter = Filters::free(6);
+        filter.reset(6, |i| i != 3);
+        let mut pieces = FloatingPieces::default();
+        pieces.find(StepSystem::new(&pattern, &matrix), &filter);
+        let (all, loose_only) = (|_: usize| true, |i: usize| i < 3);
+        // The loose chain on planes, cut anywhere: sliding.
+        assert!(pieces.cut_only_where_resting(all, loose_only));
+        assert!(pieces.cut_only_where_resting(all, |i| i == 1));
+        // Nothing cut: nothing to hold the advance back.
+        assert!(pieces.cut_only_where_resting(|_| false, |_| false));
+        // One of its particles off its plane: a cloth landing, not sliding.
+        assert!(!pieces.cut_only_where_resting(|i| i != 2, |i| i == 1));
+        // A particle of the pinned chain cut, on a plane or not: not a loose piece.
+        assert!(!pieces.cut_only_where_resting(all, |i| i == 4));
     }
 }
