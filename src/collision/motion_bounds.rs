@@ -452,11 +452,7 @@ impl MotionBounds {
                 left
             })
             .collect_into_vec(vertices_left);
-        // Each edge against the edges near it, both ways round: each visit lowers only its
-        // own edge's vertices, so it looks no farther than their nearest pairs so far,
-        // which the vertices' pass has mostly found, where a visit for all four vertices
-        // would look as far as the reach. A pair's distance is measured with its
-        // lower-numbered edge first, so that both visits give the same bits.
+        // Each edge against the edges after it.
         (0..edges.len() as u32)
             .into_par_iter()
             .with_min_len(PARALLEL_MIN_LEN)
@@ -470,14 +466,13 @@ impl MotionBounds {
                         return;
                     }
                     if one_side_still(&[a, b], &[c, d]) {
-                        // The planes' pass visits each such pair from its lower edge.
                         left = true;
                         return;
                     }
                     if own.distance(&edge_tree.aabb(f)) >= farthest(&[a, b, c, d]) {
                         return;
                     }
-                    let distance = if e < f { edge_edge(x, [a, b], [c, d]) } else { edge_edge(x, [c, d], [a, b]) };
+                    let distance = edge_edge(x, [a, b], [c, d]);
                     if distance < reach {
                         [a, b, c, d].into_iter().for_each(|k| lower(k, distance));
                     }
