@@ -71,6 +71,12 @@ impl Bound {
         self.plane.truncate().dot(y) - self.plane.w
     }
 
+    /// Whether a vertex at `y` is pressed against the plane: within two slacks of it, as a
+    /// projected step puts it one slack beyond.
+    pub fn pressed(&self, y: Vec3) -> bool {
+        self.plane != Vec4::ZERO && self.room(y) <= 2.0 * self.slack
+    }
+
     /// The fraction `t ∈ [0, 1]` of the straight move by `step` from `from` (within the
     /// bound) that keeps the vertex within the bound about `anchor`.
     pub fn allowed(&self, anchor: Vec3, from: Vec3, step: Vec3) -> f32 {
@@ -443,8 +449,7 @@ impl MotionBounds {
                     // Only this iteration sets `v`'s support: the nearest still triangle of
                     // its own cloth so far bounds the search. So does its nearest pair: a
                     // plane on a triangle farther than that would loosen nothing.
-                    let still = supporting(&support[v as usize]).map(|_| support[v as usize].load(Ordering::Relaxed));
-                    let limit = still.map_or(own, |s| f32::from_bits((s >> 32) as u32).min(own));
+                    let limit = supporting(&support[v as usize]).map_or(own, |(_, d)| d.min(own));
                     if let Some((t, d)) = others.under(p, limit) {
                         rest_on(v, Under::theirs(t, triangles), d);
                     }
@@ -488,10 +493,11 @@ impl MotionBounds {
         }
         let Self { nearest, planes, .. } = &*self;
         // A pair with another cloth, which stands still, that the planes keep apart
-        // ([`guarded`]) bounds no ball.
-        let planed = resting.is_some() && self.supported;
+        // bounds no ball.
+        let kept = |moving: &[u32], still: &[Vec3]| {
+            resting.is_some_and(|r| self.keeps_apart(x, moving, still, reach, r.separation))
+        };
         let slack = resting.map_or(0.0, |r| SLACK * r.separation);
-        let kept = |moving: &[u32], still: &[Vec3]| planed && guarded(planes, x, moving, still, GAMMA * reach, slack);
         if let Some(others) = others {
             let lower = |k: u32, d: f32| lower_to(nearest, k, d);
             let farthest = |vertices: &[u32]| farthest_in(nearest, vertices);
@@ -547,8 +553,7 @@ impl MotionBounds {
                             return;
                         }
                         let [pc, pd] = their_edges[f as usize].map(|k| y[k as usize]);
-                        let (s, t) = closest_between_segments(pa, pb, pc, pd);
-                        let distance = (pa + s * (pb - pa)).distance(pc + t * (pd - pc));
+                        let distance = segment_distance([pa, pb], [pc, pd]);
                         if !kept(&[a, b], &[pc, pd]) {
                             [a, b].into_iter().for_each(|k| lower(k, distance));
                         }
@@ -578,7 +583,7 @@ impl MotionBounds {
         planes.resize(x.len(), Vec4::ZERO);
         planes.par_iter_mut().zip(support.par_iter()).enumerate().with_min_len(PARALLEL_MIN_LEN).for_each(
             |(v, (plane, s))| {
-                *plane = match supporting(s).and_then(|t| Under::of(t, triangles, others)) {
+                *plane = match supporting(s).and_then(|(t, _)| Under::of(t, triangles, others)) {
                     None => Vec4::ZERO,
                     Some(under) => {
                         let (corners, separation) = match under {
@@ -599,14 +604,12 @@ impl MotionBounds {
     /// the first pass found such pairs of.
     fn guard(&self, surface: Surface<'_>, resting: Resting<'_>, x: &[Vec3], reach: f32) {
         let Surface { triangles, edges } = surface;
-        let Self { triangle_tree, edge_tree, nearest, planes, vertices_left, edges_left, .. } = self;
+        let Self { triangle_tree, edge_tree, nearest, vertices_left, edges_left, .. } = self;
         let still = |k: u32| resting.mobility[k as usize] == Mobility::Still;
         let all_still = |vertices: &[u32]| vertices.iter().all(|&k| still(k));
         let lower = |k: u32, d: f32| lower_to(nearest, k, d);
         let farthest = |vertices: &[u32]| farthest_in(nearest, vertices);
-        let kept = |moving: &[u32], still: &[Vec3]| {
-            self.supported && guarded(planes, x, moving, still, GAMMA * reach, SLACK * resting.separation)
-        };
+        let kept = |moving: &[u32], still: &[Vec3]| self.keeps_apart(x, moving, still, reach, resting.separation);
         let at = |k: u32| x[k as usize];
         let vertices = (0..x.len() as u32).into_par_iter().with_min_len(PARALLEL_MIN_LEN);
         vertices.filter(|&v| vertices_left[v as usize]).for_each(|v| {
@@ -651,6 +654,13 @@ impl MotionBounds {
         });
     }
 
+    /// Whether the planes of this call keep the `moving` vertices, at `x`, off the `still`
+    /// points whatever they do within balls of up to `GAMMA · reach` ([`guarded`]), with
+    /// a slack of the layers' `separation`.
+    fn keeps_apart(&self, x: &[Vec3], moving: &[u32], still: &[Vec3], reach: f32, separation: f32) -> bool {
+        self.supported && guarded(&self.planes, x, moving, still, GAMMA * reach, SLACK * separation)
+    }
+
     /// Whether the last call gave any vertex a still triangle's plane.
     pub fn supported(&self) -> bool {
         self.supported
@@ -673,7 +683,7 @@ impl MotionBounds {
         start: &[Vec3],
         h: f32,
     ) -> Option<(Vec3, Vec3, f32)> {
-        let t = supporting(self.support.get(i).filter(|_| self.supported)?)?;
+        let (t, _) = supporting(self.support.get(i).filter(|_| self.supported)?)?;
         let under = Under::of(t, triangles, others)?;
         let (corners, layers) = match under {
             Under::Own(t) => (triangles[t as usize].map(|k| end[k as usize]), layers),
@@ -717,10 +727,10 @@ fn farthest_in(nearest: &[AtomicU32], vertices: &[u32]) -> f32 {
     vertices.iter().map(|&k| f32::from_bits(nearest[k as usize].load(Ordering::Relaxed))).fold(0.0, f32::max)
 }
 
-/// The still triangle a vertex's support holds, if any.
-fn supporting(support: &AtomicU64) -> Option<u32> {
+/// The still triangle a vertex's support holds, if any, and the vertex's distance from it.
+fn supporting(support: &AtomicU64) -> Option<(u32, f32)> {
     let s = support.load(Ordering::Relaxed);
-    (s != NO_SUPPORT).then_some((s & u64::from(u32::MAX)) as u32)
+    (s != NO_SUPPORT).then_some(((s & u64::from(u32::MAX)) as u32, f32::from_bits((s >> 32) as u32)))
 }
 
 /// The triangle with corners `corners` seen from `p`: its unit normal on `p`'s side, and
@@ -764,7 +774,11 @@ impl<'a> Under<'a> {
 
 /// The distance between edges `e` and `f` at `x`.
 fn edge_edge(x: &[Vec3], e: [u32; 2], f: [u32; 2]) -> f32 {
-    let [pa, pb, pc, pd] = [e[0], e[1], f[0], f[1]].map(|k| x[k as usize]);
+    segment_distance(e.map(|k| x[k as usize]), f.map(|k| x[k as usize]))
+}
+
+/// The distance between the segments `[pa, pb]` and `[pc, pd]`.
+fn segment_distance([pa, pb]: [Vec3; 2], [pc, pd]: [Vec3; 2]) -> f32 {
     let (s, t) = closest_between_segments(pa, pb, pc, pd);
     (pa + s * (pb - pa)).distance(pc + t * (pd - pc))
 }

@@ -295,10 +295,11 @@ fn measure(
 /// whose gap does not shrink as it slides, and whose balls are set by its own sheet (a
 /// 40 mm slide a step against balls of 7 mm stopped after the first move). A piece
 /// partly on planes is a cloth landing, which the looser rule made stretch more (the
-/// fold heap peaked at 0.73 strain against 0.48). `bounds` end measured at the anchor. A start outside them, which
-/// contact stopped, is then pulled back onto them for particles the filters leave free; a
-/// constrained particle, whose `delta` the filter fixes in part, is left unbounded until
-/// the bounds are next measured. Returns the longest move the bounds were asked for.
+/// fold heap peaked at 0.73 strain against 0.48). `bounds` end measured at the anchor.
+/// A start outside them, which contact stopped, is then pulled back onto them for
+/// particles the filters leave free; a constrained particle, whose `delta` the filter
+/// fixes in part, is left unbounded until the bounds are next measured. Returns the
+/// longest move the bounds were asked for.
 ///
 /// Starting the sweeps from the bounds instead, every particle held back by them, would
 /// leave the sweeps a global error to remove, which Gauss–Seidel removes last: a falling
@@ -334,10 +335,7 @@ fn advance_anchor(
             .reduce(|| (0, 0.0), |(a, x), (b, y)| (a + b, x.max(y)));
         let mut sliding = || {
             let cut = |i: usize| reach(&bounds[i], frame.anchor[i], frame.offset(i, delta[i])) < 1.0;
-            // Pressed against its plane, as `translate_pieces` has it.
-            let pressed =
-                |i: usize| bounds[i].plane != Vec4::ZERO && bounds[i].room(frame.anchor[i]) <= 2.0 * bounds[i].slack;
-            floating.cut_only_where_resting(pressed, cut)
+            floating.cut_only_where_resting(|i| bounds[i].pressed(frame.anchor[i]), cut)
         };
         if beyond == 0 || advance == MAX_ADVANCES || (left > 0.75 * wanted && (left > 0.9 * wanted || !sliding())) {
             break;
@@ -499,12 +497,8 @@ pub fn descend(
 /// planes of their bounds that they are pressed against, and within the bounds.
 fn translate_pieces(rhs: &[Vec3], motion: Option<&BoundedMotion<'_>>, delta: &mut [Vec3], ws: &mut DescentWorkspace) {
     let (bounds, frame) = (&ws.bounds, motion.map(BoundedMotion::frame));
-    // A particle within two slacks of its plane is pressed against it: a projected step
-    // puts it one slack beyond.
     let plane = |i: usize, d: Vec3| match frame {
-        Some(f) if bounds[i].room(position(f.base, f.scale, i, d)) <= 2.0 * bounds[i].slack => {
-            bounds[i].plane.truncate()
-        }
+        Some(f) if bounds[i].pressed(position(f.base, f.scale, i, d)) => bounds[i].plane.truncate(),
         _ => Vec3::ZERO,
     };
     let allowed = |i: usize, d: Vec3, t: Vec3| frame.map_or(1.0, |f| f.allowed(i, d, t, &bounds[i]));

@@ -14,9 +14,9 @@
 //! (a still layer's or a body's, which bound block descent's sweeps) takes its translation
 //! along them only, and the planes' pushes are not residual for it to undo: its
 //! translation's part into them is the planes' to bear, within the sweeps. Pieces that
-//! touch a pin or a constraint are left out. There a uniform move is not a soft mode, and moving the whole piece would stretch it at
-//! what holds it: block descent started from a uniform translation of a pinned sheet
-//! peaked at 4.3 % strain against 2.9 %.
+//! touch a pin or a constraint are left out. There a uniform move is not a soft mode, and
+//! moving the whole piece would stretch it at what holds it: block descent started from a
+//! uniform translation of a pinned sheet peaked at 4.3 % strain against 2.9 %.
 
 use glam::{DMat3, DVec3, Mat3, Vec3};
 
