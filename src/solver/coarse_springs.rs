@@ -10,61 +10,87 @@
 //! them alone could not correct it.
 //!
 //! Springs join vertices far apart in the cloth, whose aggregates no coarse pattern
-//! joins, so they stay beside each coarse level's Galerkin matrix as a sum of terms
-//! `Qᵀ B Q`, one a spring, `Q = Σ_k w_k (S P)_k` the prolongated stencil, a few blocks
-//! wide: on the first coarse level the rows of the prolongator at the four vertices
-//! weighted, on each coarser one the last level's `Q` times that level's prolongator.
-//! The Galerkin matrices are then formed without the springs' diagonal blocks, so that
-//! each level holds `(S P)ᵀ A (S P)` of the whole system. The terms follow the springs:
-//! they are formed for every system, while the Galerkin matrices are kept for as long as
-//! they serve.
+//! joins, so their sum stays beside each coarse level's Galerkin matrix as a sparse
+//! matrix of its own over the nodes they reach. On the first coarse level it is the sum
+//! of terms `Qᵀ B Q`, one a spring, `Q = Σ_k w_k (S P)_k` the prolongated stencil, a few
+//! blocks wide (the rows of the prolongator at the four vertices, weighted); on each
+//! coarser one it is the finer level's sum restricted, `Pᵀ M P`, which is the same sum of
+//! the springs' terms carried down, in far fewer products where springs crowd. The
+//! Galerkin matrices are then formed without the springs' diagonal blocks, so that each
+//! level holds `(S P)ᵀ A (S P)` of the whole system. The sums follow the springs: they
+//! are formed for every system, while the Galerkin matrices are kept for as long as they
+//! serve.
 
 use super::contact_springs::{ContactSpring, Weights};
-use super::elements::block::{times, transposed_times};
 use super::gather::{FLOOR, reserve_floored};
-use glam::{Mat3, Vec3, Vec3A};
+use glam::{DMat3, DVec3, Mat3, Vec3};
 
 /// Entries a term is given room for: its nodes on a coarse level, where its four
 /// vertices' rows of the prolongator reach a few aggregates each (two nodes an aggregate).
 const ENTRIES: usize = 16;
 
-/// Per spring of a coarse level, `Qᵀ B Q` over a few nodes, with what a smoother and a
-/// direct solver need of them.
+/// The contact springs' couplings on a coarse level, `Σ Lᵀ R` over terms each a few
+/// nodes wide, summed into a sparse matrix over the nodes they reach, with what a
+/// smoother and a direct solver need of it.
 #[derive(Debug, Clone, Default)]
 pub struct CoarseSprings {
-    /// Term `t`'s entries are `offsets[t]..offsets[t + 1]` of `nodes` and `blocks`.
+    /// Term `t`'s left entries are `offsets[t]..offsets[t + 1]` of `nodes` and `blocks`:
+    /// a spring's `Q`, which takes the nodes' unknowns to the pair's relative motion, or a
+    /// finer node's row of the prolongator.
     offsets: Vec<u32>,
-    /// Per entry its node, ascending within a term.
+    /// Per left entry its node, ascending within a term.
     nodes: Vec<u32>,
-    /// Per entry its block of `Q`, which takes the node's unknowns to the pair's relative
-    /// motion.
     blocks: Vec<Mat3>,
-    /// Per term, the spring's block `B`.
-    springs: Vec<Mat3>,
-    /// Node `c`'s entries are `at[at_offsets[c]..at_offsets[c + 1]]` (in term order),
-    /// their terms in `term_of`: the rows of the product, each summed on its own.
+    /// Term `t`'s right entries are `right_offsets[t]..right_offsets[t + 1]` of
+    /// `right_nodes` and `right_blocks`: a spring's `B Q`, or the finer node's row of the
+    /// finer sum times the prolongator, `(M P)_c`.
+    right_offsets: Vec<u32>,
+    right_nodes: Vec<u32>,
+    right_blocks: Vec<DMat3>,
+    /// Node `c`'s left entries are `at[at_offsets[c]..at_offsets[c + 1]]` (in term
+    /// order), their terms in `term_of`: the rows of the sum, each summed on its own.
     at_offsets: Vec<u32>,
     at: Vec<u32>,
     term_of: Vec<u32>,
     /// The nodes some term reaches, ascending.
     reached: Vec<u32>,
-    /// Per node, its diagonal block `Σ Q_cᵀ B Q_c`, and the block with its partner in a
-    /// pair (node `c ^ 1`).
+    /// The terms summed: the row of `reached[k]` is `row_offsets[k]..row_offsets[k + 1]`
+    /// of `columns` and `sums`, each column once. Where springs crowd (two cloths lying
+    /// on each other, a spring at every vertex of one), many terms reach the same few
+    /// coarse nodes: untangle_layers' first coarse level held 3 941 springs' terms of
+    /// 15 594 entries over 50 nodes, whose sum has 548 blocks, and a product term by term
+    /// cost twice the entries. The sums, and the right entries they are summed from, are
+    /// in double precision: a block is as stiff as a spring, a thousand times the mass,
+    /// while moving two layers together strains no spring, and a product term by term
+    /// formed that relative motion before the stiffness took it; in single precision the
+    /// summed blocks' rounding would stand where the cancellation was.
+    row_offsets: Vec<u32>,
+    columns: Vec<u32>,
+    sums: Vec<DMat3>,
+    /// Per node, its diagonal block of the sum, and the block with its partner in a pair
+    /// (node `c ^ 1`).
     own: Vec<Mat3>,
     partner: Vec<Mat3>,
-    /// Scratch, kept so that a step allocates nothing: a term's entries as they are
-    /// gathered, and each node's next place in `at`.
+    /// Scratch, kept so that a step allocates nothing: a term's left and right entries as
+    /// they are gathered, each node's next place in `at`, and each node's place in the row
+    /// being summed (`u32::MAX` where the row has none).
     gathered: Vec<(u32, Mat3)>,
+    accumulated: Vec<(u32, DMat3)>,
     next: Vec<u32>,
+    slot: Vec<u32>,
 }
 
 impl CoarseSprings {
     /// Whether there are no terms.
     pub fn is_empty(&self) -> bool {
-        self.springs.is_empty()
+        self.terms() == 0
     }
 
-    /// Sets the terms of the first coarse level (`nodes` of them) from the acting
+    fn terms(&self) -> usize {
+        self.offsets.len().saturating_sub(1)
+    }
+
+    /// Sets the sum of the first coarse level (`nodes` of them) from the acting
     /// `springs` as weighted in the system, given the rows of the finest level's filtered
     /// prolongator `S P`: `row(i, visit)` calls `visit(column, block)` for each block of
     /// row `i`.
@@ -82,26 +108,51 @@ impl CoarseSprings {
             for (&vertex, &weight) in s.stencil.vertices.iter().zip(&s.stencil.weights) {
                 row(vertex as usize, &mut |column, block| entries.push((column, weight * block)));
             }
-            self.push(s.block(weights), &mut entries);
+            self.push_left(&mut entries);
+            let spring = s.block(weights);
+            let left = self.offsets[self.offsets.len() - 2] as usize..self.nodes.len();
+            for e in left {
+                self.right_nodes.push(self.nodes[e]);
+                self.right_blocks.push((spring * self.blocks[e]).as_dmat3());
+            }
+            self.right_offsets.push(self.right_nodes.len() as u32);
         }
         self.gathered = entries;
         self.index(nodes);
     }
 
-    /// Sets the terms to `finer`'s on the next coarser level (`nodes` of them), given the
-    /// rows of the prolongator between them, as [`CoarseSprings::restrict_springs`].
+    /// Sets the sum to `finer`'s restricted to the next coarser level (`nodes` of them),
+    /// `Pᵀ M P`, given the rows of the prolongator `P` between them, as
+    /// [`CoarseSprings::restrict_springs`]: a term for each row `c` the finer sum has, its
+    /// row of `P` on the left and `(M P)_c` on the right.
     pub fn restrict(&mut self, finer: &CoarseSprings, nodes: usize, row: impl Fn(usize, &mut dyn FnMut(u32, Mat3))) {
         self.clear();
-        let mut entries = std::mem::take(&mut self.gathered);
-        for (t, &spring) in finer.springs.iter().enumerate() {
+        let (mut entries, mut product) = (std::mem::take(&mut self.gathered), std::mem::take(&mut self.accumulated));
+        let mut slot = std::mem::take(&mut self.slot);
+        slot.clear();
+        slot.resize(nodes, u32::MAX);
+        for (c, columns, blocks) in finer.rows() {
             entries.clear();
-            for e in finer.entries(t) {
-                let q = finer.blocks[e];
-                row(finer.nodes[e] as usize, &mut |column, block| entries.push((column, q * block)));
+            row(c, &mut |column, block| entries.push((column, block)));
+            self.push_left(&mut entries);
+            product.clear();
+            for (&f, &m) in columns.iter().zip(blocks) {
+                row(f as usize, &mut |column, block| match slot[column as usize] {
+                    u32::MAX => {
+                        slot[column as usize] = product.len() as u32;
+                        product.push((column, m * block.as_dmat3()));
+                    }
+                    at => product[at as usize].1 += m * block.as_dmat3(),
+                });
             }
-            self.push(spring, &mut entries);
+            for &(column, block) in &product {
+                slot[column as usize] = u32::MAX;
+                self.right_nodes.push(column);
+                self.right_blocks.push(block);
+            }
+            self.right_offsets.push(self.right_nodes.len() as u32);
         }
-        self.gathered = entries;
+        (self.gathered, self.accumulated, self.slot) = (entries, product, slot);
         self.index(nodes);
     }
 
@@ -115,26 +166,36 @@ impl CoarseSprings {
     /// of [`ENTRIES`] entries each: contact that starts or grows in a warm frame then
     /// allocates nothing ([`reserve_floored`]).
     fn clear(&mut self) {
-        self.offsets.clear();
-        self.offsets.push(0);
-        self.nodes.clear();
+        for offsets in [&mut self.offsets, &mut self.right_offsets] {
+            offsets.clear();
+            offsets.push(0);
+            reserve_floored(offsets, FLOOR);
+        }
+        for nodes in [&mut self.nodes, &mut self.right_nodes] {
+            nodes.clear();
+            reserve_floored(nodes, FLOOR * ENTRIES);
+        }
         self.blocks.clear();
-        self.springs.clear();
-        self.gathered.clear();
-        reserve_floored(&mut self.offsets, FLOOR);
-        reserve_floored(&mut self.springs, FLOOR);
-        reserve_floored(&mut self.nodes, FLOOR * ENTRIES);
         reserve_floored(&mut self.blocks, FLOOR * ENTRIES);
+        self.right_blocks.clear();
+        reserve_floored(&mut self.right_blocks, FLOOR * ENTRIES);
+        self.gathered.clear();
         reserve_floored(&mut self.gathered, 4 * ENTRIES);
+        self.accumulated.clear();
+        reserve_floored(&mut self.accumulated, 4 * ENTRIES);
     }
 
     fn entries(&self, t: usize) -> std::ops::Range<usize> {
         self.offsets[t] as usize..self.offsets[t + 1] as usize
     }
 
-    /// Appends a term of block `spring` over `entries`, whose blocks at the same node are
-    /// added (in the order given).
-    fn push(&mut self, spring: Mat3, entries: &mut [(u32, Mat3)]) {
+    fn right_entries(&self, t: usize) -> std::ops::Range<usize> {
+        self.right_offsets[t] as usize..self.right_offsets[t + 1] as usize
+    }
+
+    /// Appends the left entries of a new term, `entries`, whose blocks at the same node
+    /// are added (in the order given).
+    fn push_left(&mut self, entries: &mut [(u32, Mat3)]) {
         entries.sort_by_key(|&(node, _)| node);
         let start = self.nodes.len();
         for &(node, block) in entries.iter() {
@@ -150,10 +211,9 @@ impl CoarseSprings {
             }
         }
         self.offsets.push(self.nodes.len() as u32);
-        self.springs.push(spring);
     }
 
-    /// Indexes the entries by node, and sums each node's diagonal blocks.
+    /// Indexes the left entries by node, and sums the terms.
     fn index(&mut self, nodes: usize) {
         self.at_offsets.clear();
         self.at_offsets.resize(nodes + 1, 0);
@@ -176,7 +236,7 @@ impl CoarseSprings {
         self.term_of.clear();
         reserve_floored(&mut self.term_of, self.nodes.capacity());
         self.term_of.resize(self.nodes.len(), 0);
-        for t in 0..self.springs.len() {
+        for t in 0..self.terms() {
             for e in self.entries(t) {
                 let slot = &mut self.next[self.nodes[e] as usize];
                 self.at[*slot as usize] = e as u32;
@@ -184,19 +244,62 @@ impl CoarseSprings {
                 *slot += 1;
             }
         }
-        let (mut own, mut partner) = (std::mem::take(&mut self.own), std::mem::take(&mut self.partner));
-        own.clear();
-        own.resize(nodes, Mat3::ZERO);
-        partner.clear();
-        partner.resize(nodes, Mat3::ZERO);
-        self.for_blocks(|row, column, block| {
-            if row == column {
-                own[row] += block;
-            } else if column == row ^ 1 {
-                partner[row] += block;
+        self.sum(nodes);
+    }
+
+    /// Sums the terms row by row over the nodes they reach, each row's blocks in term
+    /// order, and keeps each node's diagonal and partner blocks.
+    fn sum(&mut self, nodes: usize) {
+        self.row_offsets.clear();
+        self.row_offsets.push(0);
+        self.columns.clear();
+        self.sums.clear();
+        reserve_floored(&mut self.row_offsets, self.reached.capacity() + 1);
+        reserve_floored(&mut self.columns, self.right_nodes.capacity());
+        reserve_floored(&mut self.sums, self.right_nodes.capacity());
+        self.slot.clear();
+        self.slot.resize(nodes, u32::MAX);
+        self.own.clear();
+        self.own.resize(nodes, Mat3::ZERO);
+        self.partner.clear();
+        self.partner.resize(nodes, Mat3::ZERO);
+        for &c in &self.reached {
+            let c = c as usize;
+            let start = self.columns.len();
+            for k in self.at_offsets[c] as usize..self.at_offsets[c + 1] as usize {
+                let (e, t) = (self.at[k] as usize, self.term_of[k] as usize);
+                let left = self.blocks[e].transpose().as_dmat3();
+                for f in self.right_entries(t) {
+                    let (column, block) = (self.right_nodes[f], left * self.right_blocks[f]);
+                    match self.slot[column as usize] {
+                        u32::MAX => {
+                            self.slot[column as usize] = self.columns.len() as u32;
+                            self.columns.push(column);
+                            self.sums.push(block);
+                        }
+                        at => self.sums[at as usize] += block,
+                    }
+                }
             }
-        });
-        (self.own, self.partner) = (own, partner);
+            for j in start..self.columns.len() {
+                let column = self.columns[j] as usize;
+                self.slot[column] = u32::MAX;
+                if column == c {
+                    self.own[c] = self.sums[j].as_mat3();
+                } else if column == c ^ 1 {
+                    self.partner[c] = self.sums[j].as_mat3();
+                }
+            }
+            self.row_offsets.push(self.columns.len() as u32);
+        }
+    }
+
+    /// The reached rows, each with its summed blocks: `(row, columns, blocks)`.
+    fn rows(&self) -> impl Iterator<Item = (usize, &[u32], &[DMat3])> {
+        self.reached.iter().zip(self.row_offsets.windows(2)).map(|(&c, span)| {
+            let span = span[0] as usize..span[1] as usize;
+            (c as usize, &self.columns[span.clone()], &self.sums[span])
+        })
     }
 
     /// Node `c`'s diagonal block.
@@ -209,42 +312,24 @@ impl CoarseSprings {
         self.partner.get(c).copied().unwrap_or(Mat3::ZERO)
     }
 
-    /// Calls `visit(row, column, block)` for every block the terms add, several times
-    /// at the same place where several terms reach it: for a dense matrix.
+    /// Calls `visit(row, column, block)` for every block of the sum: for a dense matrix.
     pub fn for_blocks(&self, mut visit: impl FnMut(usize, usize, Mat3)) {
-        for (t, &spring) in self.springs.iter().enumerate() {
-            for e in self.entries(t) {
-                let pushed = spring * self.blocks[e];
-                for f in self.entries(t) {
-                    visit(self.nodes[f] as usize, self.nodes[e] as usize, self.blocks[f].transpose() * pushed);
-                }
+        for (row, columns, blocks) in self.rows() {
+            for (&column, &block) in columns.iter().zip(blocks) {
+                visit(row, column as usize, block.as_mat3());
             }
         }
     }
 
-    /// Sets the rows the terms reach of `out` to those of `Σ Qᵀ B Q x`, with `pushes`
-    /// (one a term) to keep `B Q x` in: each term's push, then each row's sum of its
-    /// entries, in term order. The rows no term reaches are left as they are (zero, kept
-    /// so by the caller): a heap's springs reach a few coarse nodes, and on
-    /// sphere_64_adaptive at rest (some 16 springs) products over every node made its
-    /// median frame 5 to 14 % longer.
-    pub fn product(&self, x: &[Vec3], pushes: &mut Vec<Vec3>, out: &mut [Vec3]) {
-        pushes.clear();
-        pushes.extend((0..self.springs.len()).map(|t| {
-            let q: Vec3A =
-                self.entries(t).map(|e| times(&self.blocks[e], Vec3A::from(x[self.nodes[e] as usize]))).sum();
-            Vec3::from(times(&self.springs[t], q))
-        }));
-        for &c in &self.reached {
-            let c = c as usize;
-            let entries = self.at_offsets[c] as usize..self.at_offsets[c + 1] as usize;
-            let sum: Vec3A = entries
-                .map(|k| {
-                    let (e, t) = (self.at[k] as usize, self.term_of[k] as usize);
-                    transposed_times(&self.blocks[e], Vec3A::from(pushes[t]))
-                })
-                .sum();
-            out[c] = Vec3::from(sum);
+    /// Sets the rows the terms reach of `out` to those of the sum times `x`. The rows no
+    /// term reaches are left as they are (zero, kept so by the caller): a heap's springs
+    /// reach a few coarse nodes, and on sphere_64_adaptive at rest (some 16 springs)
+    /// products over every node made its median frame 5 to 14 % longer.
+    pub fn product(&self, x: &[Vec3], out: &mut [Vec3]) {
+        for (row, columns, blocks) in self.rows() {
+            let sum: DVec3 =
+                columns.iter().zip(blocks).map(|(&column, block)| *block * x[column as usize].as_dvec3()).sum();
+            out[row] = sum.as_vec3();
         }
     }
 }

@@ -62,7 +62,6 @@ use super::elements::half::row_product;
 use super::elements::spring::{outer, skew};
 use super::elements::{BlockPattern, HalfBlock, StoredBlock, SymmetricBlockMatrix, WeightedCouplings};
 use super::filter::{Filters, free_inverse};
-use super::gather::{FLOOR, reserve_floored};
 use super::implicit::StepSystem;
 use super::pipeline::pipelined;
 use super::{PARALLEL_MIN_LEN, add_rows};
@@ -1033,23 +1032,19 @@ impl Operator<'_> {
     }
 }
 
-/// A level's product with its springs' part ([`SpringPart`]), and the pushes of a
-/// coarse level's terms ([`CoarseSprings::product`]). The product is zero but at the
+/// A level's product with its springs' part ([`SpringPart`]). The product is zero but at the
 /// rows the springs reach, which each product sets: a heap's springs reach a few rows.
 #[derive(Debug, Clone, Default)]
 struct Coupled {
     product: Vec<Vec3>,
-    pushes: Vec<Vec3>,
     terms: SpringTerms,
 }
 
 impl Coupled {
-    /// Zeroes the product for a level of `rows` nodes and new springs, and makes room for
-    /// [`FLOOR`] springs.
+    /// Zeroes the product for a level of `rows` nodes and new springs.
     fn reset(&mut self, rows: usize) {
         self.product.clear();
         self.product.resize(rows, Vec3::ZERO);
-        reserve_floored(&mut self.pushes, FLOOR);
     }
 
     /// The springs' part of `a` times `x`, if it has one.
@@ -1061,7 +1056,7 @@ impl Coupled {
                 }
                 add_product(springs, &mut self.terms, weights, Blocks::OffDiagonal, x, &mut self.product);
             }
-            SpringPart::Terms(terms) => terms.product(x, &mut self.pushes, &mut self.product),
+            SpringPart::Terms(terms) => terms.product(x, &mut self.product),
         }
         Some(&self.product)
     }
@@ -2367,12 +2362,13 @@ mod tests {
     }
 
     #[test]
-    fn the_first_coarse_level_is_the_galerkin_product_of_the_system_with_its_contact_springs() {
+    fn every_coarse_level_is_the_galerkin_product_of_the_system_with_its_contact_springs() {
         // A 24² sheet folded in thought: springs join vertices of its two halves, far apart
         // in the pattern, as a heap's layers are joined. The first coarse level, its
-        // Galerkin matrix with the springs' terms beside it, must be `(S P)ᵀ A (S P)` of the
+        // Galerkin matrix with the springs' sum beside it, must be `(S P)ᵀ A (S P)` of the
         // whole system, the springs' couplings in it, not their diagonal blocks alone, and
-        // of this system's springs, not those its matrix was formed for.
+        // of this system's springs, not those its matrix was formed for; and each level
+        // below it the same product of the level above.
         let n_side = 24;
         let (pattern, mut system) = sheet(n_side, 1.0, 1.0e3);
         let hierarchy = Hierarchy::build(&pattern, &pattern, &pattern);
@@ -2453,6 +2449,36 @@ mod tests {
         // The smoother's pair blocks hold the springs' terms, and their inverses are right.
         for p in 0..m / 2 {
             assert_generalised_inverse(&pair_block(coarse, p), &pair_inverse(coarse, p));
+        }
+        // Each coarser level is the Galerkin product of the one above it, the springs'
+        // sum restricted with it.
+        let depth = hierarchy.coarsenings.len();
+        assert!(depth >= 2, "a second coarse level to restrict the springs' sum to");
+        for l in 1..depth {
+            let operator = |l: usize| {
+                coarse_operator(&hierarchy.coarsenings[l].coarse, &multigrid.matrices[l], &multigrid.couplings[l])
+            };
+            let (finer, coarse, coarsening) = (operator(l - 1), operator(l), &hierarchy.coarsenings[l]);
+            assert!(coarse.springs.is_some(), "level {l} holds the springs");
+            let (n, m) = (finer.pattern.rows(), coarse.pattern.rows());
+            let x: Vec<Vec3> = (0..m as u32).map(irregular).collect();
+            let prolongation = &multigrid.levels[l].prolongation;
+            let fine: Vec<Vec3> = (0..n).map(|i| prolongation.row_product(&coarsening.prolongation, i, &x)).collect();
+            let mut product = vec![Vec3::ZERO; n];
+            finer.multiply(&fine, &mut product);
+            let mut expected = vec![Vec3::ZERO; m];
+            prolongation.restrict(
+                &coarsening.restriction,
+                &coarsening.prolongation,
+                &product,
+                &mut Vec::new(),
+                &mut expected,
+            );
+            let mut got = vec![Vec3::ZERO; m];
+            coarse.multiply(&x, &mut got);
+            let error = got.iter().zip(&expected).map(|(g, e)| (*g - *e).length()).fold(0.0, f32::max);
+            let scale = expected.iter().map(|e| e.length()).fold(0.0, f32::max);
+            assert!(error < 1e-4 * scale, "level {l}'s product off by {error} of {scale}");
         }
     }
 
