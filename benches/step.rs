@@ -14,6 +14,7 @@ use selvedge::collision::intersection::IntersectionCounter;
 use selvedge::components::{BendingDesc, BendingLawDesc, ClothMaterial, ClothTopology, MembraneDesc, SolverParts};
 use selvedge::pool::run_awake;
 use selvedge::scene::parse_scene;
+use selvedge::solver::contact_springs::{ContactSpring, Outside, Stencil, Weights, add_diagonal};
 use selvedge::solver::descent::{DescentSettings, DescentWorkspace, descend};
 use selvedge::solver::elements::{SymmetricBlockMatrix, VelocityJacobian};
 use selvedge::solver::filter::Filters;
@@ -100,7 +101,8 @@ impl Sheet {
 /// 1000 N/m, bending 1e-5 N·m, 0.2 kg/m²): force evaluation, the per-frame probes
 /// (potential energy, largest strain, self-intersection count), derivative assembly, one
 /// symmetric block-descent sweep and one multigrid V-cycle over the implicit-Euler system
-/// at 1/60 s, and whole steps of three integrators, each timed on a worker of rayon's
+/// at 1/60 s, the multigrid's prepare and V-cycle with contact springs as in a heap, and
+/// whole steps of three integrators, each timed on a worker of rayon's
 /// pool ([`on_pool`]); and the forces and derivatives again with `law: Quadratic`.
 fn kernels(c: &mut Criterion) {
     let mut group = c.benchmark_group("kernels");
@@ -172,6 +174,25 @@ fn kernels(c: &mut Criterion) {
         group.bench_function(BenchmarkId::new("v_cycle", &size), |b| {
             on_pool(b, || multigrid.apply(hierarchy, system_at, &filter, black_box(&rhs), &mut delta, None));
         });
+        // The same sheet as a heap, folded in thought: a contact spring holds each vertex
+        // of its lower half off the triangle mirrored across the fold, half as many springs
+        // as particles (untangle_layers holds three a particle). What a step's lagged
+        // solve prepares again (the springs' coarse sums, smoothers and coarsest factor,
+        // the levels kept), and a V-cycle with them.
+        let springs = folded_springs(n);
+        let weights = Weights { stiffness: h * h, drag: h };
+        let mut heap = system.clone();
+        add_diagonal(&springs, weights, pattern, &mut heap);
+        let heap_at = StepSystem::new(pattern, &heap);
+        let with_springs = Some((springs.as_slice(), weights));
+        let mut multigrid = Multigrid::default();
+        multigrid.prepare(hierarchy, heap_at, &filter, &x, with_springs, false);
+        group.bench_function(BenchmarkId::new("multigrid/springs_changed", &size), |b| {
+            on_pool(b, || multigrid.prepare(hierarchy, heap_at, &filter, black_box(&x), with_springs, true));
+        });
+        group.bench_function(BenchmarkId::new("v_cycle/heap", &size), |b| {
+            on_pool(b, || multigrid.apply(hierarchy, heap_at, &filter, black_box(&rhs), &mut delta, with_springs));
+        });
         group.bench_function(BenchmarkId::new("descent_sweep", &size), |b| {
             on_pool(b, || {
                 descend(
@@ -211,6 +232,28 @@ fn kernels(c: &mut Criterion) {
         }
     }
     group.finish();
+}
+
+/// A contact spring from each vertex of the lower half of an `n × n` grid to the
+/// triangle mirrored across its middle row, as layers of a heap are joined: far apart in
+/// the sheet's pattern.
+fn folded_springs(n: u32) -> Vec<ContactSpring> {
+    (0..n / 2 - 1)
+        .flat_map(|row| (0..n - 1).map(move |column| (row, column)))
+        .map(|(row, column)| {
+            let (p, q) = (row * n + column, (n - 1 - row) * n + column);
+            ContactSpring {
+                stencil: Stencil::point_triangle(p, [q, q + 1, q - n], [0.2, 0.5, 0.3]),
+                normal: Vec3::Z,
+                gap: 0.002,
+                stiffness: 500.0,
+                friction: 0.3,
+                drag: 20.0,
+                armed: 0.0,
+                outside: Outside::default(),
+            }
+        })
+        .collect()
 }
 
 /// Times `work` on a worker of rayon's pool with the other workers kept awake, as the

@@ -22,8 +22,9 @@
 //! serve.
 
 use super::contact_springs::{ContactSpring, Weights};
+use super::elements::block::times;
 use super::gather::{FLOOR, reserve_floored};
-use glam::{DMat3, DVec3, Mat3, Vec3};
+use glam::{Mat3, Vec3, Vec3A};
 
 /// Entries a term is given room for: its nodes on a coarse level, where its four
 /// vertices' rows of the prolongator reach a few aggregates each (two nodes an aggregate).
@@ -46,7 +47,7 @@ pub struct CoarseSprings {
     /// finer sum times the prolongator, `(M P)_c`.
     right_offsets: Vec<u32>,
     right_nodes: Vec<u32>,
-    right_blocks: Vec<DMat3>,
+    right_blocks: Vec<Mat3>,
     /// Node `c`'s left entries are `at[at_offsets[c]..at_offsets[c + 1]]` (in term
     /// order), their terms in `term_of`: the rows of the sum, each summed on its own.
     at_offsets: Vec<u32>,
@@ -59,14 +60,15 @@ pub struct CoarseSprings {
     /// on each other, a spring at every vertex of one), many terms reach the same few
     /// coarse nodes: untangle_layers' first coarse level held 3 941 springs' terms of
     /// 15 594 entries over 50 nodes, whose sum has 548 blocks, and a product term by term
-    /// cost twice the entries. The sums, and the right entries they are summed from, are
-    /// in double precision: a block is as stiff as a spring, a thousand times the mass,
-    /// while moving two layers together strains no spring, and a product term by term
-    /// formed that relative motion before the stiffness took it; in single precision the
-    /// summed blocks' rounding would stand where the cancellation was.
+    /// cost twice the entries. Single precision serves: moving two layers together
+    /// strains no spring, and the product with the summed blocks rounds that
+    /// cancellation to the same order, `ε |Q|² |B|`, as a product term by term, which
+    /// formed the relative motion `Q x` before the stiffness took it (double-precision
+    /// sums were tried: 15 to 20 % slower to form, and over five starts of
+    /// sphere_64_adaptive's chaotic settling their iterations spread as widely).
     row_offsets: Vec<u32>,
     columns: Vec<u32>,
-    sums: Vec<DMat3>,
+    sums: Vec<Mat3>,
     /// Per node, its diagonal block of the sum, and the block with its partner in a pair
     /// (node `c ^ 1`).
     own: Vec<Mat3>,
@@ -75,7 +77,7 @@ pub struct CoarseSprings {
     /// they are gathered, each node's next place in `at`, and each node's place in the row
     /// being summed (`u32::MAX` where the row has none).
     gathered: Vec<(u32, Mat3)>,
-    accumulated: Vec<(u32, DMat3)>,
+    accumulated: Vec<(u32, Mat3)>,
     next: Vec<u32>,
     slot: Vec<u32>,
 }
@@ -113,7 +115,7 @@ impl CoarseSprings {
             let left = self.offsets[self.offsets.len() - 2] as usize..self.nodes.len();
             for e in left {
                 self.right_nodes.push(self.nodes[e]);
-                self.right_blocks.push((spring * self.blocks[e]).as_dmat3());
+                self.right_blocks.push(spring * self.blocks[e]);
             }
             self.right_offsets.push(self.right_nodes.len() as u32);
         }
@@ -140,9 +142,9 @@ impl CoarseSprings {
                 row(f as usize, &mut |column, block| match slot[column as usize] {
                     u32::MAX => {
                         slot[column as usize] = product.len() as u32;
-                        product.push((column, m * block.as_dmat3()));
+                        product.push((column, m * block));
                     }
-                    at => product[at as usize].1 += m * block.as_dmat3(),
+                    at => product[at as usize].1 += m * block,
                 });
             }
             for &(column, block) in &product {
@@ -268,7 +270,7 @@ impl CoarseSprings {
             let start = self.columns.len();
             for k in self.at_offsets[c] as usize..self.at_offsets[c + 1] as usize {
                 let (e, t) = (self.at[k] as usize, self.term_of[k] as usize);
-                let left = self.blocks[e].transpose().as_dmat3();
+                let left = self.blocks[e].transpose();
                 for f in self.right_entries(t) {
                     let (column, block) = (self.right_nodes[f], left * self.right_blocks[f]);
                     match self.slot[column as usize] {
@@ -285,9 +287,9 @@ impl CoarseSprings {
                 let column = self.columns[j] as usize;
                 self.slot[column] = u32::MAX;
                 if column == c {
-                    self.own[c] = self.sums[j].as_mat3();
+                    self.own[c] = self.sums[j];
                 } else if column == c ^ 1 {
-                    self.partner[c] = self.sums[j].as_mat3();
+                    self.partner[c] = self.sums[j];
                 }
             }
             self.row_offsets.push(self.columns.len() as u32);
@@ -295,7 +297,7 @@ impl CoarseSprings {
     }
 
     /// The reached rows, each with its summed blocks: `(row, columns, blocks)`.
-    fn rows(&self) -> impl Iterator<Item = (usize, &[u32], &[DMat3])> {
+    fn rows(&self) -> impl Iterator<Item = (usize, &[u32], &[Mat3])> {
         self.reached.iter().zip(self.row_offsets.windows(2)).map(|(&c, span)| {
             let span = span[0] as usize..span[1] as usize;
             (c as usize, &self.columns[span.clone()], &self.sums[span])
@@ -316,7 +318,7 @@ impl CoarseSprings {
     pub fn for_blocks(&self, mut visit: impl FnMut(usize, usize, Mat3)) {
         for (row, columns, blocks) in self.rows() {
             for (&column, &block) in columns.iter().zip(blocks) {
-                visit(row, column as usize, block.as_mat3());
+                visit(row, column as usize, block);
             }
         }
     }
@@ -327,9 +329,9 @@ impl CoarseSprings {
     /// products over every node made its median frame 5 to 14 % longer.
     pub fn product(&self, x: &[Vec3], out: &mut [Vec3]) {
         for (row, columns, blocks) in self.rows() {
-            let sum: DVec3 =
-                columns.iter().zip(blocks).map(|(&column, block)| *block * x[column as usize].as_dvec3()).sum();
-            out[row] = sum.as_vec3();
+            let sum: Vec3A =
+                columns.iter().zip(blocks).map(|(&column, block)| times(block, Vec3A::from(x[column as usize]))).sum();
+            out[row] = Vec3::from(sum);
         }
     }
 }

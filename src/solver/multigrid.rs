@@ -2422,25 +2422,13 @@ mod tests {
         let m = coarse.pattern.rows();
         for seed in 0..4 {
             let x: Vec<Vec3> = (0..m as u32).map(|c| irregular(c ^ seed)).collect();
-            let mut expected = vec![Vec3::ZERO; m];
-            let fine: Vec<Vec3> =
-                (0..n).map(|i| level.prolongation.row_product(&coarsening.prolongation, i, &x)).collect();
+            let fine = prolongated(&level.prolongation, coarsening, n, &x);
             let mut product = vec![Vec3::ZERO; n];
             system.multiply(&pattern, &fine, &mut product);
             // The springs' diagonal blocks alone, before their couplings are added.
             let diagonal_only = product.clone();
             add_product(&springs, &mut SpringTerms::default(), weights, Blocks::OffDiagonal, &fine, &mut product);
-            level.prolongation.restrict(
-                &coarsening.restriction,
-                &coarsening.prolongation,
-                &product,
-                &mut Vec::new(),
-                &mut expected,
-            );
-            let mut got = vec![Vec3::ZERO; m];
-            coarse.multiply(&x, &mut got);
-            let error = got.iter().zip(&expected).map(|(g, e)| (*g - *e).length()).fold(0.0, f32::max);
-            let scale = expected.iter().map(|e| e.length()).fold(0.0, f32::max);
+            let (error, scale) = galerkin_error(coarse, &x, coarsening, &level.prolongation, &product);
             assert!(error < 1e-4 * scale, "coarse product off by {error} of {scale}");
             // Against the springs' diagonal blocks alone, it differs.
             let apart = diagonal_only.iter().zip(&product).map(|(d, p)| (*d - *p).length()).fold(0.0, f32::max);
@@ -2463,23 +2451,39 @@ mod tests {
             let (n, m) = (finer.pattern.rows(), coarse.pattern.rows());
             let x: Vec<Vec3> = (0..m as u32).map(irregular).collect();
             let prolongation = &multigrid.levels[l].prolongation;
-            let fine: Vec<Vec3> = (0..n).map(|i| prolongation.row_product(&coarsening.prolongation, i, &x)).collect();
             let mut product = vec![Vec3::ZERO; n];
-            finer.multiply(&fine, &mut product);
-            let mut expected = vec![Vec3::ZERO; m];
-            prolongation.restrict(
-                &coarsening.restriction,
-                &coarsening.prolongation,
-                &product,
-                &mut Vec::new(),
-                &mut expected,
-            );
-            let mut got = vec![Vec3::ZERO; m];
-            coarse.multiply(&x, &mut got);
-            let error = got.iter().zip(&expected).map(|(g, e)| (*g - *e).length()).fold(0.0, f32::max);
-            let scale = expected.iter().map(|e| e.length()).fold(0.0, f32::max);
+            finer.multiply(&prolongated(prolongation, coarsening, n, &x), &mut product);
+            let (error, scale) = galerkin_error(coarse, &x, coarsening, prolongation, &product);
             assert!(error < 1e-4 * scale, "level {l}'s product off by {error} of {scale}");
         }
+    }
+
+    /// `S P x` on the `n` nodes of the level above `coarsening`.
+    fn prolongated(prolongation: &Prolongation, coarsening: &Coarsening, n: usize, x: &[Vec3]) -> Vec<Vec3> {
+        (0..n).map(|i| prolongation.row_product(&coarsening.prolongation, i, x)).collect()
+    }
+
+    /// How far `coarse x` is from `(S P)ᵀ product`, the level above's product restricted,
+    /// and the largest entry of the latter.
+    fn galerkin_error(
+        coarse: Operator,
+        x: &[Vec3],
+        coarsening: &Coarsening,
+        prolongation: &Prolongation,
+        product: &[Vec3],
+    ) -> (f32, f32) {
+        let mut expected = vec![Vec3::ZERO; x.len()];
+        prolongation.restrict(
+            &coarsening.restriction,
+            &coarsening.prolongation,
+            product,
+            &mut Vec::new(),
+            &mut expected,
+        );
+        let mut got = vec![Vec3::ZERO; x.len()];
+        coarse.multiply(x, &mut got);
+        let error = got.iter().zip(&expected).map(|(g, e)| (*g - *e).length()).fold(0.0, f32::max);
+        (error, expected.iter().map(|e| e.length()).fold(0.0, f32::max))
     }
 
     /// Two 24² sheets 2 mm apart, h²k/m = 10⁴ in their planes, the upper one held off the
