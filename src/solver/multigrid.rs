@@ -32,7 +32,7 @@
 //!
 //! Contact springs between layers of a heap couple vertices that no aggregate groups
 //! together. The finest level holds their diagonal blocks (in the system), the coarse
-//! levels the springs whole, as terms beside their Galerkin matrices
+//! levels the springs whole, summed into a sparse matrix beside their Galerkin matrices
 //! ([`CoarseSprings`]): with the diagonal blocks alone, a coarse level took the motion of
 //! two layers together along their normal for as stiff as the springs, and could not
 //! correct it. fold_64 stepped as sphere_64_adaptive is (`step_motion: 0.25`, multigrid)
@@ -708,7 +708,7 @@ pub struct Multigrid {
     /// Matrices of the levels below the finest (whose matrix is `fine`), stored on and
     /// above their diagonals.
     matrices: Vec<SymmetricBlockMatrix>,
-    /// Per level below the finest, the contact springs' terms beside its matrix.
+    /// Per level below the finest, the contact springs' sum beside its matrix.
     couplings: Vec<CoarseSprings>,
     /// Per particle, the springs' diagonal blocks in the system, which the Galerkin
     /// product leaves out; empty where the cloth does not collide with itself.
@@ -1602,7 +1602,7 @@ impl Multigrid {
     /// ahead, on its diagonal: no copy (144 bytes a particle).
     ///
     /// The contact `springs`, with the weights of their blocks in the system, enter the
-    /// coarse levels whole, as terms beside their Galerkin matrices ([`CoarseSprings`]),
+    /// coarse levels whole, summed beside their Galerkin matrices ([`CoarseSprings`]),
     /// formed for every system with the coarse smoothers and the coarsest factor. `None`
     /// where the system's cloth does not collide with itself, so that no spring will
     /// come: the levels then keep nothing for them, where otherwise they keep room for
@@ -1809,9 +1809,10 @@ fn acting(springs: Option<(&[ContactSpring], Weights)>) -> Option<(&[ContactSpri
     springs.filter(|(springs, _)| springs.iter().any(ContactSpring::acts))
 }
 
-/// Sets `out` to the springs' terms on the coarse level of `coarsening`, through the
-/// prolongator from it: from the `finer` level's terms, or from the `springs` and their
-/// weights below the finest level; none where the system has no springs to come.
+/// Sets `out` to the springs' sum on the coarse level of `coarsening`, through the
+/// prolongator from it: the `finer` level's sum restricted, or below the finest level the
+/// `springs`' terms with their weights, summed; none where the system has no springs to
+/// come.
 fn restrict_springs(
     coarsening: &Coarsening,
     prolongation: &Prolongation,
