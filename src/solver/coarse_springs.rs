@@ -56,7 +56,7 @@ pub struct CoarseSprings {
     /// The nodes some term reaches, ascending.
     reached: Vec<u32>,
     /// The terms summed: the row of `reached[k]` is `row_offsets[k]..row_offsets[k + 1]`
-    /// of `columns` and `sums`, each column once. Where springs crowd (two cloths lying
+    /// of `sums`, (column, block), each column once. Where springs crowd (two cloths lying
     /// on each other, a spring at every vertex of one), many terms reach the same few
     /// coarse nodes: untangle_layers' first coarse level held 3 941 springs' terms of
     /// 15 594 entries over 50 nodes, whose sum has 548 blocks, and a product term by term
@@ -67,8 +67,7 @@ pub struct CoarseSprings {
     /// sums were tried: 15 to 20 % slower to form, and over five starts of
     /// sphere_64_adaptive's chaotic settling their iterations spread as widely).
     row_offsets: Vec<u32>,
-    columns: Vec<u32>,
-    sums: Vec<Mat3>,
+    sums: Vec<(u32, Mat3)>,
     /// Per node, its diagonal block of the sum, and the block with its partner in a pair
     /// (node `c ^ 1`).
     own: Vec<Mat3>,
@@ -110,10 +109,8 @@ impl CoarseSprings {
             for (&vertex, &weight) in s.stencil.vertices.iter().zip(&s.stencil.weights) {
                 row(vertex as usize, &mut |column, block| entries.push((column, weight * block)));
             }
-            self.push_left(&mut entries);
             let spring = s.block(weights);
-            let left = self.offsets[self.offsets.len() - 2] as usize..self.nodes.len();
-            for e in left {
+            for e in self.push_left(&mut entries) {
                 self.right_nodes.push(self.nodes[e]);
                 self.right_blocks.push(spring * self.blocks[e]);
             }
@@ -133,19 +130,13 @@ impl CoarseSprings {
         let mut slot = std::mem::take(&mut self.slot);
         slot.clear();
         slot.resize(nodes, u32::MAX);
-        for (c, columns, blocks) in finer.rows() {
+        for (c, blocks) in finer.rows() {
             entries.clear();
             row(c, &mut |column, block| entries.push((column, block)));
             self.push_left(&mut entries);
             product.clear();
-            for (&f, &m) in columns.iter().zip(blocks) {
-                row(f as usize, &mut |column, block| match slot[column as usize] {
-                    u32::MAX => {
-                        slot[column as usize] = product.len() as u32;
-                        product.push((column, m * block));
-                    }
-                    at => product[at as usize].1 += m * block,
-                });
+            for &(f, m) in blocks {
+                row(f as usize, &mut |column, block| accumulate(&mut slot, &mut product, column, m * block));
             }
             for &(column, block) in &product {
                 slot[column as usize] = u32::MAX;
@@ -196,8 +187,8 @@ impl CoarseSprings {
     }
 
     /// Appends the left entries of a new term, `entries`, whose blocks at the same node
-    /// are added (in the order given).
-    fn push_left(&mut self, entries: &mut [(u32, Mat3)]) {
+    /// are added (in the order given), and returns where they lie.
+    fn push_left(&mut self, entries: &mut [(u32, Mat3)]) -> std::ops::Range<usize> {
         entries.sort_by_key(|&(node, _)| node);
         let start = self.nodes.len();
         for &(node, block) in entries.iter() {
@@ -213,6 +204,7 @@ impl CoarseSprings {
             }
         }
         self.offsets.push(self.nodes.len() as u32);
+        start..self.nodes.len()
     }
 
     /// Indexes the left entries by node, and sums the terms.
@@ -254,10 +246,8 @@ impl CoarseSprings {
     fn sum(&mut self, nodes: usize) {
         self.row_offsets.clear();
         self.row_offsets.push(0);
-        self.columns.clear();
         self.sums.clear();
         reserve_floored(&mut self.row_offsets, self.reached.capacity() + 1);
-        reserve_floored(&mut self.columns, self.right_nodes.capacity());
         reserve_floored(&mut self.sums, self.right_nodes.capacity());
         self.slot.clear();
         self.slot.resize(nodes, u32::MAX);
@@ -267,41 +257,33 @@ impl CoarseSprings {
         self.partner.resize(nodes, Mat3::ZERO);
         for &c in &self.reached {
             let c = c as usize;
-            let start = self.columns.len();
+            let start = self.sums.len();
             for k in self.at_offsets[c] as usize..self.at_offsets[c + 1] as usize {
                 let (e, t) = (self.at[k] as usize, self.term_of[k] as usize);
                 let left = self.blocks[e].transpose();
                 for f in self.right_entries(t) {
-                    let (column, block) = (self.right_nodes[f], left * self.right_blocks[f]);
-                    match self.slot[column as usize] {
-                        u32::MAX => {
-                            self.slot[column as usize] = self.columns.len() as u32;
-                            self.columns.push(column);
-                            self.sums.push(block);
-                        }
-                        at => self.sums[at as usize] += block,
-                    }
+                    accumulate(&mut self.slot, &mut self.sums, self.right_nodes[f], left * self.right_blocks[f]);
                 }
             }
-            for j in start..self.columns.len() {
-                let column = self.columns[j] as usize;
+            for &(column, block) in &self.sums[start..] {
+                let column = column as usize;
                 self.slot[column] = u32::MAX;
                 if column == c {
-                    self.own[c] = self.sums[j];
+                    self.own[c] = block;
                 } else if column == c ^ 1 {
-                    self.partner[c] = self.sums[j];
+                    self.partner[c] = block;
                 }
             }
-            self.row_offsets.push(self.columns.len() as u32);
+            self.row_offsets.push(self.sums.len() as u32);
         }
     }
 
-    /// The reached rows, each with its summed blocks: `(row, columns, blocks)`.
-    fn rows(&self) -> impl Iterator<Item = (usize, &[u32], &[Mat3])> {
-        self.reached.iter().zip(self.row_offsets.windows(2)).map(|(&c, span)| {
-            let span = span[0] as usize..span[1] as usize;
-            (c as usize, &self.columns[span.clone()], &self.sums[span])
-        })
+    /// The reached rows, each with its summed blocks: `(row, [(column, block)])`.
+    fn rows(&self) -> impl Iterator<Item = (usize, &[(u32, Mat3)])> {
+        self.reached
+            .iter()
+            .zip(self.row_offsets.windows(2))
+            .map(|(&c, span)| (c as usize, &self.sums[span[0] as usize..span[1] as usize]))
     }
 
     /// Node `c`'s diagonal block.
@@ -316,8 +298,8 @@ impl CoarseSprings {
 
     /// Calls `visit(row, column, block)` for every block of the sum: for a dense matrix.
     pub fn for_blocks(&self, mut visit: impl FnMut(usize, usize, Mat3)) {
-        for (row, columns, blocks) in self.rows() {
-            for (&column, &block) in columns.iter().zip(blocks) {
+        for (row, blocks) in self.rows() {
+            for &(column, block) in blocks {
                 visit(row, column as usize, block);
             }
         }
@@ -328,10 +310,23 @@ impl CoarseSprings {
     /// reach a few coarse nodes, and on sphere_64_adaptive at rest (some 16 springs)
     /// products over every node made its median frame 5 to 14 % longer.
     pub fn product(&self, x: &[Vec3], out: &mut [Vec3]) {
-        for (row, columns, blocks) in self.rows() {
-            let sum: Vec3A =
-                columns.iter().zip(blocks).map(|(&column, block)| times(block, Vec3A::from(x[column as usize]))).sum();
+        for (row, blocks) in self.rows() {
+            let sum: Vec3A = blocks.iter().map(|(column, block)| times(block, Vec3A::from(x[*column as usize]))).sum();
             out[row] = Vec3::from(sum);
         }
+    }
+}
+
+/// Adds `block` at `column` to the row being summed into `row`, where `slot` holds each
+/// column's place in `row` so far (`u32::MAX` for none): each column once, its blocks
+/// added in the order given. The caller sets the slots of the row's columns back to
+/// `u32::MAX` when the row is whole.
+fn accumulate(slot: &mut [u32], row: &mut Vec<(u32, Mat3)>, column: u32, block: Mat3) {
+    match slot[column as usize] {
+        u32::MAX => {
+            slot[column as usize] = row.len() as u32;
+            row.push((column, block));
+        }
+        at => row[at as usize].1 += block,
     }
 }
