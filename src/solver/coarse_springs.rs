@@ -22,13 +22,23 @@
 //! serve.
 
 use super::contact_springs::{ContactSpring, Weights};
-use super::elements::block::times;
+use super::elements::block::{by_parts, by_parts_keeping, times};
 use super::gather::{FLOOR, reserve_floored};
 use glam::{Mat3, Vec3, Vec3A};
 
 /// Entries a term is given room for: its nodes on a coarse level, where its four
 /// vertices' rows of the prolongator reach a few aggregates each (two nodes an aggregate).
 const ENTRIES: usize = 16;
+
+/// The most parts a sum's rows are cut into, each summed on a task of its own.
+const MAX_PARTS: usize = 8;
+
+/// The block products a part of a sum takes at least, so that a task outweighs its
+/// scheduling: untangle_layers' first coarse level, some 60 000, is summed in eight parts.
+const PART_WORK: usize = 4096;
+
+/// The blocks a sum holds from which its product runs its parts in parallel.
+const PARALLEL_BLOCKS: usize = 16_384;
 
 /// The contact springs' couplings on a coarse level, `Σ Lᵀ R` over terms each a few
 /// nodes wide, summed into a sparse matrix over the nodes they reach, with what a
@@ -55,26 +65,27 @@ pub struct CoarseSprings {
     term_of: Vec<u32>,
     /// The nodes some term reaches, ascending.
     reached: Vec<u32>,
-    /// The terms summed: the row of `reached[k]` is `row_offsets[k]..row_offsets[k + 1]`
-    /// of `sums`, (column, block), each column once. Where springs crowd (two cloths lying
-    /// on each other, a spring at every vertex of one), many terms reach the same few
-    /// coarse nodes: untangle_layers' first coarse level held 3 941 springs' terms of
-    /// 15 594 entries over 50 nodes, whose sum has 548 blocks, and a product term by term
-    /// cost twice the entries. Single precision serves: moving two layers together
-    /// strains no spring, and the product with the summed blocks rounds that
-    /// cancellation to the same order, `ε |Q|² |B|`, as a product term by term, which
-    /// formed the relative motion `Q x` before the stiffness took it (double-precision
-    /// sums were tried: 15 to 20 % slower to form, and over five starts of
-    /// sphere_64_adaptive's chaotic settling their iterations spread as widely).
-    row_offsets: Vec<u32>,
-    sums: Vec<(u32, Mat3)>,
-    /// Per node, its diagonal block of the sum, and the block with its partner in a pair
+    /// The terms summed, in parts of the reached rows summed in parallel: part `p` holds
+    /// the rows `reached[part_rows[p]..part_rows[p + 1]]`, the nodes from `bounds[p]` to
+    /// `bounds[p + 1]`. Where springs crowd (two cloths lying on each other, a spring at
+    /// every vertex of one), many terms reach the same few coarse nodes: untangle_layers'
+    /// first coarse level held 3 941 springs' terms of 15 594 entries over 50 nodes, whose
+    /// sum has 548 blocks, and a product term by term cost twice the entries. Single
+    /// precision serves: moving two layers together strains no spring, and the product
+    /// with the summed blocks rounds that cancellation to the same order, `ε |Q|² |B|`,
+    /// as a product term by term, which formed the relative motion `Q x` before the
+    /// stiffness took it (double-precision sums were tried: 15 to 20 % slower to form, and
+    /// over five starts of sphere_64_adaptive's chaotic settling their iterations spread
+    /// as widely).
+    parts: Vec<SumPart>,
+    part_rows: Vec<usize>,
+    bounds: Vec<usize>,
+    /// Per node, its diagonal block of the sum and the block with its partner in a pair
     /// (node `c ^ 1`).
-    own: Vec<Mat3>,
-    partner: Vec<Mat3>,
+    near: Vec<[Mat3; 2]>,
     /// Scratch, kept so that a step allocates nothing: a term's left and right entries as
     /// they are gathered, each node's next place in `at`, and each node's place in the row
-    /// being summed (`u32::MAX` where the row has none).
+    /// of `P` times the finer sum being formed (`u32::MAX` where the row has none).
     gathered: Vec<(u32, Mat3)>,
     accumulated: Vec<(u32, Mat3)>,
     next: Vec<u32>,
@@ -241,59 +252,105 @@ impl CoarseSprings {
         self.sum(nodes);
     }
 
-    /// Sums the terms row by row over the nodes they reach, each row's blocks in term
-    /// order, and keeps each node's diagonal and partner blocks.
-    fn sum(&mut self, nodes: usize) {
-        self.row_offsets.clear();
-        self.row_offsets.push(0);
-        self.sums.clear();
-        reserve_floored(&mut self.row_offsets, self.reached.capacity() + 1);
-        reserve_floored(&mut self.sums, self.right_nodes.capacity());
-        self.slot.clear();
-        self.slot.resize(nodes, u32::MAX);
-        self.own.clear();
-        self.own.resize(nodes, Mat3::ZERO);
-        self.partner.clear();
-        self.partner.resize(nodes, Mat3::ZERO);
-        for &c in &self.reached {
+    /// Cuts the reached rows into parts of about equal work (the block products their
+    /// rows take), at most [`MAX_PARTS`] and none under [`PART_WORK`] but the only one.
+    fn cut(&mut self, nodes: usize) {
+        let (mut part_rows, mut bounds) = (std::mem::take(&mut self.part_rows), std::mem::take(&mut self.bounds));
+        let work = |c: u32| -> usize {
             let c = c as usize;
-            let start = self.sums.len();
-            for k in self.at_offsets[c] as usize..self.at_offsets[c + 1] as usize {
-                let (e, t) = (self.at[k] as usize, self.term_of[k] as usize);
-                let left = self.blocks[e].transpose();
-                for f in self.right_entries(t) {
-                    accumulate(&mut self.slot, &mut self.sums, self.right_nodes[f], left * self.right_blocks[f]);
-                }
+            let terms = &self.term_of[self.at_offsets[c] as usize..self.at_offsets[c + 1] as usize];
+            terms.iter().map(|&t| self.right_entries(t as usize).len()).sum()
+        };
+        let total: usize = self.reached.iter().map(|&c| work(c)).sum();
+        let parts = total.div_ceil(PART_WORK).clamp(1, MAX_PARTS);
+        part_rows.clear();
+        part_rows.push(0);
+        bounds.clear();
+        bounds.push(0);
+        let mut done = 0;
+        for (k, &c) in self.reached.iter().enumerate() {
+            let cuts = part_rows.len();
+            if cuts < parts && k > 0 && done * parts >= cuts * total {
+                part_rows.push(k);
+                bounds.push(c as usize);
             }
-            for &(column, block) in &self.sums[start..] {
-                let column = column as usize;
-                self.slot[column] = u32::MAX;
-                if column == c {
-                    self.own[c] = block;
-                } else if column == c ^ 1 {
-                    self.partner[c] = block;
-                }
-            }
-            self.row_offsets.push(self.sums.len() as u32);
+            done += work(c);
         }
+        part_rows.push(self.reached.len());
+        bounds.push(nodes);
+        (self.part_rows, self.bounds) = (part_rows, bounds);
+        if self.parts.len() < MAX_PARTS {
+            self.parts.resize_with(MAX_PARTS, SumPart::default);
+        }
+    }
+
+    /// Sums the terms row by row over the nodes they reach, each row's blocks in term
+    /// order, and keeps each node's diagonal and partner blocks: the parts in parallel,
+    /// the same sums on any number of threads.
+    fn sum(&mut self, nodes: usize) {
+        self.cut(nodes);
+        let parts = self.bounds.len() - 1;
+        self.near.clear();
+        self.near.resize(nodes, [Mat3::ZERO; 2]);
+        let share = self.right_nodes.capacity().div_ceil(parts);
+        let (mut near, mut sums) = (std::mem::take(&mut self.near), std::mem::take(&mut self.parts));
+        let (terms, reached, part_rows) = (&*self, &self.reached, &self.part_rows);
+        by_parts_keeping(&mut near, &mut sums[..parts], &self.bounds, |p, rows, near, part| {
+            part.row_offsets.clear();
+            part.row_offsets.push(0);
+            reserve_floored(&mut part.row_offsets, part_rows[p + 1] - part_rows[p]);
+            part.sums.clear();
+            reserve_floored(&mut part.sums, share);
+            part.slot.clear();
+            part.slot.resize(nodes, u32::MAX);
+            for &c in &reached[part_rows[p]..part_rows[p + 1]] {
+                let c = c as usize;
+                let start = part.sums.len();
+                for k in terms.at_offsets[c] as usize..terms.at_offsets[c + 1] as usize {
+                    let (e, t) = (terms.at[k] as usize, terms.term_of[k] as usize);
+                    let left = terms.blocks[e].transpose();
+                    for f in terms.right_entries(t) {
+                        let block = left * terms.right_blocks[f];
+                        accumulate(&mut part.slot, &mut part.sums, terms.right_nodes[f], block);
+                    }
+                }
+                for &(column, block) in &part.sums[start..] {
+                    let column = column as usize;
+                    part.slot[column] = u32::MAX;
+                    if column == c {
+                        near[c - rows.start][0] = block;
+                    } else if column == c ^ 1 {
+                        near[c - rows.start][1] = block;
+                    }
+                }
+                part.row_offsets.push(part.sums.len() as u32);
+            }
+        });
+        (self.near, self.parts) = (near, sums);
+    }
+
+    /// Part `p`'s rows, each with its summed blocks: `(row, [(column, block)])`.
+    fn part(&self, p: usize) -> impl Iterator<Item = (usize, &[(u32, Mat3)])> {
+        let part = &self.parts[p];
+        self.reached[self.part_rows[p]..self.part_rows[p + 1]]
+            .iter()
+            .zip(part.row_offsets.windows(2))
+            .map(|(&c, span)| (c as usize, &part.sums[span[0] as usize..span[1] as usize]))
     }
 
     /// The reached rows, each with its summed blocks: `(row, [(column, block)])`.
     fn rows(&self) -> impl Iterator<Item = (usize, &[(u32, Mat3)])> {
-        self.reached
-            .iter()
-            .zip(self.row_offsets.windows(2))
-            .map(|(&c, span)| (c as usize, &self.sums[span[0] as usize..span[1] as usize]))
+        (0..self.bounds.len().saturating_sub(1)).flat_map(|p| self.part(p))
     }
 
     /// Node `c`'s diagonal block.
     pub fn own(&self, c: usize) -> Mat3 {
-        self.own.get(c).copied().unwrap_or(Mat3::ZERO)
+        self.near.get(c).map_or(Mat3::ZERO, |near| near[0])
     }
 
     /// The block of row `c` in the column of its partner `c ^ 1`.
     pub fn partner(&self, c: usize) -> Mat3 {
-        self.partner.get(c).copied().unwrap_or(Mat3::ZERO)
+        self.near.get(c).map_or(Mat3::ZERO, |near| near[1])
     }
 
     /// Calls `visit(row, column, block)` for every block of the sum: for a dense matrix.
@@ -305,16 +362,41 @@ impl CoarseSprings {
         }
     }
 
-    /// Sets the rows the terms reach of `out` to those of the sum times `x`. The rows no
-    /// term reaches are left as they are (zero, kept so by the caller): a heap's springs
-    /// reach a few coarse nodes, and on sphere_64_adaptive at rest (some 16 springs)
-    /// products over every node made its median frame 5 to 14 % longer.
+    /// Sets the rows the terms reach of `out` to those of the sum times `x`, the parts in
+    /// parallel where the sum holds [`PARALLEL_BLOCKS`]. The rows no term reaches are left
+    /// as they are (zero, kept so by the caller): a heap's springs reach a few coarse
+    /// nodes, and on sphere_64_adaptive at rest (some 16 springs) products over every
+    /// node made its median frame 5 to 14 % longer.
     pub fn product(&self, x: &[Vec3], out: &mut [Vec3]) {
-        for (row, blocks) in self.rows() {
+        let row = |blocks: &[(u32, Mat3)]| -> Vec3 {
             let sum: Vec3A = blocks.iter().map(|(column, block)| times(block, Vec3A::from(x[*column as usize]))).sum();
-            out[row] = Vec3::from(sum);
+            Vec3::from(sum)
+        };
+        let parts = self.bounds.len().saturating_sub(1);
+        let blocks: usize = self.parts[..parts].iter().map(|part| part.sums.len()).sum();
+        if blocks < PARALLEL_BLOCKS {
+            for (c, blocks) in self.rows() {
+                out[c] = row(blocks);
+            }
+            return;
         }
+        by_parts(out, &self.bounds, |p, nodes, out| {
+            for (c, blocks) in self.part(p) {
+                out[c - nodes.start] = row(blocks);
+            }
+        });
     }
+}
+
+/// A part of a sum's rows: the rows' blocks, and its scratch.
+#[derive(Debug, Clone, Default)]
+struct SumPart {
+    /// Its `k`th row is `row_offsets[k]..row_offsets[k + 1]` of `sums`, (column, block),
+    /// each column once.
+    row_offsets: Vec<u32>,
+    sums: Vec<(u32, Mat3)>,
+    /// Each node's place in the row being summed (`u32::MAX` where the row has none).
+    slot: Vec<u32>,
 }
 
 /// Adds `block` at `column` to the row being summed into `row`, where `slot` holds each
@@ -328,5 +410,80 @@ fn accumulate(slot: &mut [u32], row: &mut Vec<(u32, Mat3)>, column: u32, block: 
             row.push((column, block));
         }
         at => row[at as usize].1 += block,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solver::contact_springs::{Outside, Stencil};
+
+    /// A block of no structure, from `seed`.
+    fn block(seed: u32) -> Mat3 {
+        let entry = |k: u32| ((seed.wrapping_mul(2_654_435_761).wrapping_add(k * 40_503) % 1000) as f32) / 500.0 - 1.0;
+        Mat3::from_cols_array(&std::array::from_fn(|k| entry(k as u32)))
+    }
+
+    #[test]
+    fn a_crowded_sum_cut_into_parts_is_the_sum_of_its_terms() {
+        // Vertex `i` reaches coarse nodes `2 (i / 3)` and the next, as a vertex reaches its
+        // aggregate's translation and rotation; springs join vertices far apart, so that
+        // the sum holds many blocks over the nodes and is cut into parts.
+        let (vertices, count) = (3_000u32, 2_000u32);
+        let nodes = 2 * vertices.div_ceil(3) as usize;
+        let row = |i: usize, visit: &mut dyn FnMut(u32, Mat3)| {
+            let node = 2 * (i / 3) as u32;
+            visit(node, block(i as u32));
+            visit(node + 1, block(i as u32 + vertices));
+        };
+        let springs: Vec<ContactSpring> = (0..count)
+            .map(|k| {
+                let (p, q) = ((k * 7) % vertices, (k * 1_543 + 1_000) % (vertices - 2));
+                let stencil = Stencil::point_triangle(p, [q, q + 1, q + 2], [0.2, 0.5, 0.3]);
+                ContactSpring {
+                    stencil,
+                    normal: Vec3::new(0.3, 1.0, -0.1 * (k % 5) as f32).normalize(),
+                    gap: 0.002,
+                    stiffness: 500.0,
+                    friction: 0.3,
+                    drag: 20.0,
+                    armed: 0.0,
+                    outside: Outside::default(),
+                }
+            })
+            .collect();
+        let weights = Weights { stiffness: 0.5, drag: 0.1 };
+        let mut sum = CoarseSprings::default();
+        sum.restrict_springs(&springs, weights, nodes, row);
+        let parts = sum.bounds.len() - 1;
+        let blocks: usize = sum.parts[..parts].iter().map(|part| part.sums.len()).sum();
+        assert_eq!(parts, MAX_PARTS, "a crowded sum is cut into every part");
+        assert!(blocks >= PARALLEL_BLOCKS, "its product runs in parallel ({blocks} blocks)");
+        assert_eq!(sum.rows().count(), sum.reached.len(), "every reached row is in a part");
+
+        // Against the terms `Qᵀ B Q x`, spring by spring, in double precision.
+        let x: Vec<Vec3> = (0..nodes as u32).map(|c| block(c).x_axis).collect();
+        let mut expected = vec![glam::DVec3::ZERO; nodes];
+        for s in &springs {
+            let mut q = Vec::new();
+            for (&vertex, &weight) in s.stencil.vertices.iter().zip(&s.stencil.weights) {
+                row(vertex as usize, &mut |node, block| q.push((node as usize, weight * block)));
+            }
+            let relative: Vec3 = q.iter().map(|(node, block)| *block * x[*node]).sum();
+            let force = s.block(weights) * relative;
+            for (node, block) in q {
+                expected[node] += block.transpose().mul_vec3(force).as_dvec3();
+            }
+        }
+        let mut out = vec![Vec3::ZERO; nodes];
+        sum.product(&x, &mut out);
+        let scale = expected.iter().map(|e| e.length()).fold(0.0, f64::max);
+        let error = expected.iter().zip(&out).map(|(e, o)| (*e - o.as_dvec3()).length()).fold(0.0, f64::max);
+        assert!(error < 1e-5 * scale, "the sum's product off by {error} of {scale}");
+        // Each node's diagonal and partner blocks are those of its row.
+        for (c, blocks) in sum.rows() {
+            let at = |column: usize| blocks.iter().find(|(j, _)| *j as usize == column).map_or(Mat3::ZERO, |b| b.1);
+            assert_eq!((sum.own(c), sum.partner(c)), (at(c), at(c ^ 1)), "node {c}");
+        }
     }
 }

@@ -357,6 +357,21 @@ pub(crate) fn by_parts<T: Send>(
     });
 }
 
+/// [`by_parts`] with one item of `kept` for each part (as many as the parts, which must
+/// not be empty): `work(part, rows, values, kept)` gets its own beside its values, such as
+/// a part's scratch and the lists it fills.
+pub(crate) fn by_parts_keeping<T: Send, K: Send>(
+    values: &mut [T],
+    kept: &mut [K],
+    bounds: &[usize],
+    work: impl Fn(usize, std::ops::Range<usize>, &mut [T], &mut K) + Sync,
+) {
+    // The storages are cut at the bounds alone, where a bound's index is its part's.
+    let part = |row: usize| bounds.partition_point(|&bound| bound < row);
+    let storages = (RowStorage { offset: &|row| row, items: values }, RowStorage { offset: &part, items: kept });
+    split_parts(storages, bounds, 0, &|p, rows, (values, kept)| work(p, rows, values.items, &mut kept.items[0]));
+}
+
 /// What is kept for a range of rows, cut where a part of the rows begins.
 trait PartStorage: Send + Sized {
     /// The storage of the rows before `at` and of those from it, this storage's rows
