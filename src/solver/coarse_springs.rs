@@ -261,7 +261,8 @@ impl CoarseSprings {
             let terms = &self.term_of[self.at_offsets[c] as usize..self.at_offsets[c + 1] as usize];
             terms.iter().map(|&t| self.right_entries(t as usize).len()).sum()
         };
-        let total: usize = self.reached.iter().map(|&c| work(c)).sum();
+        // Each left entry is at one node: the total is the terms' own, without the index.
+        let total: usize = (0..self.terms()).map(|t| self.entries(t).len() * self.right_entries(t).len()).sum();
         let parts = total.div_ceil(PART_WORK).clamp(1, MAX_PARTS);
         part_rows.clear();
         part_rows.push(0);
