@@ -23,6 +23,7 @@ use selvedge::solver::implicit::StepSystem;
 use selvedge::solver::integrate::{Integrator, IntegratorWorkspace, MethodSettings, step};
 use selvedge::solver::multigrid::Multigrid;
 use selvedge::solver::probes::most_stretched_edge;
+use selvedge::solver::spring_couplings::SpringCouplings;
 
 const SIZES: [u32; 2] = [64, 256];
 
@@ -184,14 +185,18 @@ fn kernels(c: &mut Criterion) {
         let mut heap = system.clone();
         add_diagonal(&springs, weights, pattern, &mut heap);
         let heap_at = StepSystem::new(pattern, &heap);
-        let with_springs = Some((springs.as_slice(), weights));
+        let mut couplings = SpringCouplings::default();
+        couplings.prepare(Some(&springs), weights, count);
         let mut multigrid = Multigrid::default();
-        multigrid.prepare(hierarchy, heap_at, &filter, &x, with_springs, false);
+        multigrid.prepare(hierarchy, heap_at, &filter, &x, Some(&couplings), false);
         group.bench_function(BenchmarkId::new("multigrid/springs_changed", &size), |b| {
-            on_pool(b, || multigrid.prepare(hierarchy, heap_at, &filter, black_box(&x), with_springs, true));
+            on_pool(b, || {
+                couplings.prepare(Some(black_box(&springs)), weights, count);
+                multigrid.prepare(hierarchy, heap_at, &filter, black_box(&x), Some(&couplings), true);
+            });
         });
         group.bench_function(BenchmarkId::new("v_cycle/heap", &size), |b| {
-            on_pool(b, || multigrid.apply(hierarchy, heap_at, &filter, black_box(&rhs), &mut delta, with_springs));
+            on_pool(b, || multigrid.apply(hierarchy, heap_at, &filter, black_box(&rhs), &mut delta, Some(&couplings)));
         });
         group.bench_function(BenchmarkId::new("descent_sweep", &size), |b| {
             on_pool(b, || {

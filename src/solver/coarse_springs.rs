@@ -21,9 +21,9 @@
 //! are formed for every system, while the Galerkin matrices are kept for as long as they
 //! serve.
 
-use super::contact_springs::{ContactSpring, Weights};
-use super::elements::block::{by_parts, by_parts_keeping, times};
+use super::elements::block::{by_parts, by_parts_keeping, cut_parts, times};
 use super::gather::{FLOOR, reserve_floored};
+use super::spring_couplings::SpringCouplings;
 use glam::{Mat3, Vec3, Vec3A};
 
 /// Entries a term is given room for: its nodes on a coarse level, where its four
@@ -102,25 +102,23 @@ impl CoarseSprings {
         self.offsets.len().saturating_sub(1)
     }
 
-    /// Sets the sum of the first coarse level (`nodes` of them) from the acting
-    /// `springs` as weighted in the system, given the rows of the finest level's filtered
+    /// Sets the sum of the first coarse level (`nodes` of them) from the acting `springs`
+    /// as weighted in the system, given the rows of the finest level's filtered
     /// prolongator `S P`: `row(i, visit)` calls `visit(column, block)` for each block of
     /// row `i`.
     pub fn restrict_springs(
         &mut self,
-        springs: &[ContactSpring],
-        weights: Weights,
+        springs: &SpringCouplings,
         nodes: usize,
         row: impl Fn(usize, &mut dyn FnMut(u32, Mat3)),
     ) {
         self.clear();
         let mut entries = std::mem::take(&mut self.gathered);
-        for s in springs.iter().filter(|s| s.acts()) {
+        for (stencil, spring) in springs.springs() {
             entries.clear();
-            for (&vertex, &weight) in s.stencil.vertices.iter().zip(&s.stencil.weights) {
+            for (&vertex, &weight) in stencil.vertices.iter().zip(&stencil.weights) {
                 row(vertex as usize, &mut |column, block| entries.push((column, weight * block)));
             }
-            let spring = s.block(weights);
             for e in self.push_left(&mut entries) {
                 self.right_nodes.push(self.nodes[e]);
                 self.right_blocks.push(spring * self.blocks[e]);
@@ -256,29 +254,14 @@ impl CoarseSprings {
     /// rows take), at most [`MAX_PARTS`] and none under [`PART_WORK`] but the only one.
     fn cut(&mut self, nodes: usize) {
         let (mut part_rows, mut bounds) = (std::mem::take(&mut self.part_rows), std::mem::take(&mut self.bounds));
-        let work = |c: u32| -> usize {
-            let c = c as usize;
+        let work = |k: usize| -> usize {
+            let c = self.reached[k] as usize;
             let terms = &self.term_of[self.at_offsets[c] as usize..self.at_offsets[c + 1] as usize];
             terms.iter().map(|&t| self.right_entries(t as usize).len()).sum()
         };
         // Each left entry is at one node: the total is the terms' own, without the index.
         let total: usize = (0..self.terms()).map(|t| self.entries(t).len() * self.right_entries(t).len()).sum();
-        let parts = total.div_ceil(PART_WORK).clamp(1, MAX_PARTS);
-        part_rows.clear();
-        part_rows.push(0);
-        bounds.clear();
-        bounds.push(0);
-        let mut done = 0;
-        for (k, &c) in self.reached.iter().enumerate() {
-            let cuts = part_rows.len();
-            if cuts < parts && k > 0 && done * parts >= cuts * total {
-                part_rows.push(k);
-                bounds.push(c as usize);
-            }
-            done += work(c);
-        }
-        part_rows.push(self.reached.len());
-        bounds.push(nodes);
+        cut_parts(&self.reached, nodes, total, PART_WORK, MAX_PARTS, work, &mut part_rows, &mut bounds);
         (self.part_rows, self.bounds) = (part_rows, bounds);
         if self.parts.len() < MAX_PARTS {
             self.parts.resize_with(MAX_PARTS, SumPart::default);
@@ -417,7 +400,7 @@ fn accumulate(slot: &mut [u32], row: &mut Vec<(u32, Mat3)>, column: u32, block: 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solver::contact_springs::{Outside, Stencil};
+    use crate::solver::contact_springs::{ContactSpring, Outside, Stencil, Weights};
 
     /// A block of no structure, from `seed`.
     fn block(seed: u32) -> Mat3 {
@@ -455,7 +438,9 @@ mod tests {
             .collect();
         let weights = Weights { stiffness: 0.5, drag: 0.1 };
         let mut sum = CoarseSprings::default();
-        sum.restrict_springs(&springs, weights, nodes, row);
+        let mut couplings = SpringCouplings::default();
+        couplings.prepare(Some(&springs), weights, vertices as usize);
+        sum.restrict_springs(&couplings, nodes, row);
         let parts = sum.bounds.len() - 1;
         let blocks: usize = sum.parts[..parts].iter().map(|part| part.sums.len()).sum();
         assert_eq!(parts, MAX_PARTS, "a crowded sum is cut into every part");

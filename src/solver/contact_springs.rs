@@ -50,7 +50,7 @@ impl Stencil {
 
     /// Its slots `(k, vertex, weight)`, but those weighed zero (another cloth's,
     /// [`Outside`]).
-    fn weighted(&self) -> impl Iterator<Item = (usize, usize, f32)> + '_ {
+    pub(crate) fn weighted(&self) -> impl Iterator<Item = (usize, usize, f32)> + '_ {
         (0..4).filter(|&k| self.weights[k] != 0.0).map(|k| (k, self.vertices[k] as usize, self.weights[k]))
     }
 
@@ -375,11 +375,11 @@ fn add_terms(
     }
 }
 
-/// `f(vertex, weight)` at each of the stencil's weighted slots, zero at the others.
-fn per_slot(stencil: &Stencil, f: impl Fn(usize, f32) -> Vec3) -> [Vec3; 4] {
+/// `f(weight)` at each of the stencil's weighted slots, zero at the others.
+fn per_slot(stencil: &Stencil, f: impl Fn(f32) -> Vec3) -> [Vec3; 4] {
     let mut slots = [Vec3::ZERO; 4];
-    for (k, vertex, weight) in stencil.weighted() {
-        slots[k] = f(vertex, weight);
+    for (k, _, weight) in stencil.weighted() {
+        slots[k] = f(weight);
     }
     slots
 }
@@ -388,17 +388,8 @@ fn per_slot(stencil: &Stencil, f: impl Fn(usize, f32) -> Vec3) -> [Vec3; 4] {
 pub fn add_forces(springs: &[ContactSpring], terms: &mut SpringTerms, x: &[Vec3], v: &[Vec3], force: &mut [Vec3]) {
     add_terms(springs, terms, force, |s| {
         let push = s.force(x, v);
-        per_slot(&s.stencil, |_, weight| weight * push)
+        per_slot(&s.stencil, |weight| weight * push)
     });
-}
-
-/// Which blocks of the springs' stiffness a product uses.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Blocks {
-    /// All of them.
-    All,
-    /// Those off the diagonal: the diagonal ones are in the matrix ([`add_diagonal`]).
-    OffDiagonal,
 }
 
 /// How much of the springs' stiffness `K = Σ k (w wᵀ) ⊗ (n nᵀ)` (`−∂f/∂x`) and of their
@@ -424,22 +415,14 @@ impl ContactSpring {
     }
 }
 
-/// `out += (a K + b C) y` for `weights` `(a, b)`, or its off-diagonal blocks alone, pair
-/// by pair in order ([`add_terms`]).
-pub fn add_product(
-    springs: &[ContactSpring],
-    terms: &mut SpringTerms,
-    weights: Weights,
-    blocks: Blocks,
-    y: &[Vec3],
-    out: &mut [Vec3],
-) {
+/// `out += (a K + b C) y` for `weights` `(a, b)`, pair by pair in order ([`add_terms`]):
+/// a product of the assembly. The solve's products take the off-diagonal blocks alone, the
+/// diagonal ones being in its matrix ([`super::spring_couplings::SpringCouplings`]).
+pub fn add_product(springs: &[ContactSpring], terms: &mut SpringTerms, weights: Weights, y: &[Vec3], out: &mut [Vec3]) {
     add_terms(springs, terms, out, |s| {
-        let block = s.block(weights);
-        let total = s.stencil.relative(y);
         // Every vertex takes the same product of the whole pair.
-        let whole = (blocks == Blocks::All).then(|| block * total);
-        per_slot(&s.stencil, |i, weight| weight * whole.unwrap_or_else(|| block * (total - weight * y[i])))
+        let whole = s.block(weights) * s.stencil.relative(y);
+        per_slot(&s.stencil, |weight| weight * whole)
     });
 }
 
@@ -544,7 +527,7 @@ mod tests {
     }
 
     #[test]
-    fn stiffness_and_friction_are_minus_the_derivatives_of_the_forces_and_split_into_diagonal_and_rest() {
+    fn stiffness_and_friction_are_minus_the_derivatives_of_the_forces() {
         let (s, x) = spring();
         let y = vec![Vec3::new(0.3, -1.0, 0.2), Vec3::new(0.1, 0.4, 0.0), Vec3::new(-0.2, 0.7, 1.0), Vec3::Y];
         let v = vec![Vec3::ZERO; 4];
@@ -563,21 +546,10 @@ mod tests {
         );
         let weights = Weights { stiffness: 0.7, drag: 0.2 };
         let mut product = vec![Vec3::ZERO; 4];
-        add_product(&[s], &mut SpringTerms::default(), weights, Blocks::All, &y, &mut product);
+        add_product(&[s], &mut SpringTerms::default(), weights, &y, &mut product);
         for k in 0..4 {
             let numeric = -(0.7 * (fx[k] - f0[k]) + 0.2 * (fv[k] - f0[k])) / eps;
             assert!((product[k] - numeric).length() < 1e-3 * numeric.length().max(1.0), "{k}");
-        }
-        // Diagonal blocks in a matrix plus the off-diagonal product give the whole.
-        let pattern = BlockPattern::from_stencils(4, std::iter::empty()).with_upper();
-        let mut matrix = SymmetricBlockMatrix::default();
-        matrix.reset(&pattern);
-        add_diagonal(&[s], weights, &pattern, &mut matrix);
-        let mut split = vec![Vec3::ZERO; 4];
-        matrix.multiply(&pattern, &y, &mut split);
-        add_product(&[s], &mut SpringTerms::default(), weights, Blocks::OffDiagonal, &y, &mut split);
-        for k in 0..4 {
-            assert!((split[k] - product[k]).length() < 1e-5, "{k}");
         }
     }
 }

@@ -23,7 +23,7 @@ use std::time::Instant;
 use glam::{Mat3, Vec3, Vec3A};
 use rayon::prelude::*;
 
-use super::contact_springs::{self, Blocks, ContactSpring, SpringTerms, Weights};
+use super::contact_springs::{self, ContactSpring, SpringTerms, Weights};
 use super::descent::{BoundedMotion, Colouring, DescentSettings, DescentWorkspace, descend};
 use super::elements::block::times;
 use super::elements::spring::outer;
@@ -31,6 +31,7 @@ use super::elements::{BlockPattern, ConstantCouplings, SymmetricBlockMatrix, Vel
 use super::filter::Filters;
 use super::integrate::{Dynamics, StageTimes, StepReport};
 use super::multigrid::{Hierarchy, Multigrid};
+use super::spring_couplings::SpringCouplings;
 use super::warm_start::WarmStart;
 use super::{PARALLEL_MIN_LEN, add_rows};
 use crate::collision::body_bounds;
@@ -175,8 +176,12 @@ pub struct ImplicitWorkspace {
     /// The weights of stiffness (`hβ + h²θ²`) and damping (`h`) in the system, which the
     /// contact springs' off-diagonal blocks take in each product.
     spring_weights: Weights,
-    /// The contact springs' terms of each product.
+    /// The contact springs' terms of the assembly's products and forces.
     spring_terms: SpringTerms,
+    /// The acting contact springs' couplings in the system's products, prepared with the
+    /// system, and their relative motions in a product.
+    spring_couplings: SpringCouplings,
+    spring_relative: Vec<Vec3>,
     /// Per chunk of [`VECTOR_CHUNK`] particles, the partial sums of the CG's dot products.
     partials: Vec<f64>,
     /// Per particle, the directions its Δv may take: identity (free), zero (pinned) or a
@@ -374,7 +379,7 @@ pub fn implicit_step(
     step_system(dynamics, &ws.dfdx, 1.0).multiply(v, &mut ws.product);
     let springs = springs_of(settings, dynamics);
     contact_springs::add_forces(springs, &mut ws.spring_terms, x, v, &mut ws.rhs);
-    contact_springs::add_product(springs, &mut ws.spring_terms, STIFFNESS, Blocks::All, v, &mut ws.product);
+    contact_springs::add_product(springs, &mut ws.spring_terms, STIFFNESS, v, &mut ws.product);
     for i in 0..n {
         let start = ws.rhs[i] - alpha * dynamics.mass(i) * v[i] + beta * ws.product[i];
         if newton {
@@ -389,13 +394,13 @@ pub fn implicit_step(
     let lagged = contact_springs::lagged_from_solves(springs_of(settings, dynamics));
     let (tolerance, guide) = (settings.cg_tolerance, LAG_LOOSENING * settings.cg_tolerance);
     let first = if lagged { guide } else { tolerance };
-    let start = match starts_warm(settings) && projected_start(dynamics, settings, ws) {
+    let start = match starts_warm(settings) && projected_start(dynamics, ws) {
         true => Start::Projected,
         false => Start::Prescribed,
     };
     report.iterations += solve(dynamics, settings, start, first, x, h * theta, ws);
     let mut accurate = !lagged;
-    set_constraint_impulses(dynamics, settings, constraints, ws);
+    set_constraint_impulses(dynamics, constraints, ws);
     // Bodies moved by the constraints' impulses: solve again, from the last solution, with
     // the velocities their balance asks for, until they settle.
     if let Some(bodies) = bodies {
@@ -413,7 +418,7 @@ pub fn implicit_step(
             }
             report.iterations += solve(dynamics, settings, Start::Given, tolerance, x, h * theta, ws);
             accurate = true;
-            set_constraint_impulses(dynamics, settings, constraints, ws);
+            set_constraint_impulses(dynamics, constraints, ws);
         }
     }
     if lagged {
@@ -429,7 +434,7 @@ pub fn implicit_step(
         }
         if !accurate {
             report.iterations += solve(dynamics, settings, Start::Given, tolerance, x, h * theta, ws);
-            set_constraint_impulses(dynamics, settings, constraints, ws);
+            set_constraint_impulses(dynamics, constraints, ws);
         }
     }
     if newton {
@@ -451,9 +456,9 @@ pub fn implicit_step(
         stiffness.multiply(&ws.dv, &mut ws.direction);
         let springs = springs_of(settings, dynamics);
         contact_springs::add_forces(springs, &mut ws.spring_terms, &ws.x, &ws.v, &mut ws.rhs);
-        contact_springs::add_product(springs, &mut ws.spring_terms, STIFFNESS, Blocks::All, &ws.v, &mut ws.product);
-        contact_springs::add_product(springs, &mut ws.spring_terms, DAMPING, Blocks::All, &ws.dv, &mut ws.residual);
-        contact_springs::add_product(springs, &mut ws.spring_terms, STIFFNESS, Blocks::All, &ws.dv, &mut ws.direction);
+        contact_springs::add_product(springs, &mut ws.spring_terms, STIFFNESS, &ws.v, &mut ws.product);
+        contact_springs::add_product(springs, &mut ws.spring_terms, DAMPING, &ws.dv, &mut ws.residual);
+        contact_springs::add_product(springs, &mut ws.spring_terms, STIFFNESS, &ws.dv, &mut ws.direction);
         // −R = h((1−θ)F₀ + θF₁ + (1−θ) D Δv) − M Δv, with F₁ = f₁ − αMv₁ + βKv₁.
         for i in 0..n {
             let mass = dynamics.mass(i);
@@ -465,7 +470,7 @@ pub fn implicit_step(
         build_system(settings, h, dynamics, ws);
         ws.stages.assembly += assembly.elapsed();
         report.iterations += solve(dynamics, settings, Start::Zero, settings.cg_tolerance, x, h * theta, ws);
-        add_constraint_impulses(dynamics, settings, constraints, ws);
+        add_constraint_impulses(dynamics, constraints, ws);
         for i in 0..n {
             ws.dv[i] += ws.delta[i];
         }
@@ -529,8 +534,9 @@ fn lag_friction(
     add_springs(-1.0, dynamics.contact_springs(), dynamics.pattern(), settings, h, x, v, ws);
     contact_springs::lag(dynamics.contact_springs_mut(), &ws.x, &ws.v);
     add_springs(1.0, dynamics.contact_springs(), dynamics.pattern(), settings, h, x, v, ws);
+    ws.spring_couplings.prepare(possible_springs(settings, dynamics), ws.spring_weights, dynamics.pattern().rows());
     let iterations = solve(dynamics, settings, Start::Given, tolerance, x, h * theta, ws);
-    set_constraint_impulses(dynamics, settings, constraints, ws);
+    set_constraint_impulses(dynamics, constraints, ws);
     Some(iterations)
 }
 
@@ -566,7 +572,7 @@ fn add_springs(
     force.fill(Vec3::ZERO);
     stiffness.fill(Vec3::ZERO);
     contact_springs::add_forces(springs, terms, x, v, force);
-    contact_springs::add_product(springs, terms, STIFFNESS, Blocks::All, v, stiffness);
+    contact_springs::add_product(springs, terms, STIFFNESS, v, stiffness);
     let (theta, beta) = (settings.theta, settings.rayleigh.beta);
     // The start force is kept for Newton iterations only (`implicit_step`).
     let newton = iterates(settings);
@@ -603,7 +609,9 @@ fn build_system(settings: &ImplicitSettings, h: f32, dynamics: &impl LinearDynam
     ws.system = std::mem::take(&mut ws.dfdx);
     ws.dfdv.combine_into(-h, k_weight, pattern, &mut ws.system, |i| (1.0 + h * alpha) * dynamics.mass(i));
     ws.spring_weights = Weights { stiffness: k_weight, drag: h };
-    contact_springs::add_diagonal(springs_of(settings, dynamics), ws.spring_weights, pattern, &mut ws.system);
+    let springs = springs_of(settings, dynamics);
+    contact_springs::add_diagonal(springs, ws.spring_weights, pattern, &mut ws.system);
+    ws.spring_couplings.prepare(possible_springs(settings, dynamics), ws.spring_weights, pattern.rows());
     ws.prepared = Prepared::Stale;
 }
 
@@ -620,25 +628,30 @@ fn springs_of<'a>(settings: &ImplicitSettings, dynamics: &'a impl LinearDynamics
     }
 }
 
+/// The contact springs the step solves with, or `None` where the cloth does not collide
+/// with itself: no step of it has springs, and nothing need be kept for them.
+fn possible_springs<'a>(settings: &ImplicitSettings, dynamics: &'a impl LinearDynamics) -> Option<&'a [ContactSpring]> {
+    let springs = springs_of(settings, dynamics);
+    (dynamics.contact_surface().is_some() || !springs.is_empty()).then_some(springs)
+}
+
 /// `out = A y`: the matrix, and the contact springs' off-diagonal blocks weighted as
-/// stiffness and damping are in `A`.
+/// stiffness and damping are in `A` (`couplings`, with `relative` as their scratch).
 fn multiply_system(
     system: StepSystem<'_>,
-    springs: &[ContactSpring],
-    terms: &mut SpringTerms,
-    weights: Weights,
+    couplings: &SpringCouplings,
+    relative: &mut Vec<Vec3>,
     y: &[Vec3],
     out: &mut [Vec3],
 ) {
     system.multiply(y, out);
-    contact_springs::add_product(springs, terms, weights, Blocks::OffDiagonal, y, out);
+    couplings.add_product(y, relative, out);
 }
 
 /// `ws.product = A δ`: the system, with its contact springs, times the last solution.
-fn multiply_solution(dynamics: &impl LinearDynamics, settings: &ImplicitSettings, ws: &mut ImplicitWorkspace) {
+fn multiply_solution(dynamics: &impl LinearDynamics, ws: &mut ImplicitWorkspace) {
     let system = step_system(dynamics, &ws.system, -ws.spring_weights.stiffness);
-    let springs = springs_of(settings, dynamics);
-    multiply_system(system, springs, &mut ws.spring_terms, ws.spring_weights, &ws.delta, &mut ws.product);
+    multiply_system(system, &ws.spring_couplings, &mut ws.spring_relative, &ws.delta, &mut ws.product);
 }
 
 fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
@@ -649,27 +662,25 @@ fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
 /// ([`add_constraint_impulses`]).
 fn set_constraint_impulses(
     dynamics: &impl LinearDynamics,
-    settings: &ImplicitSettings,
     constraints: &[VelocityConstraint],
     ws: &mut ImplicitWorkspace,
 ) {
     ws.constraint_impulses.clear();
     ws.constraint_impulses.resize(constraints.len(), Vec3::ZERO);
-    add_constraint_impulses(dynamics, settings, constraints, ws);
+    add_constraint_impulses(dynamics, constraints, ws);
 }
 
 /// Adds what each constraint had to supply in the last solve, `A δ − rhs` at its
 /// particle: the body's push that the filter stood in for.
 fn add_constraint_impulses(
     dynamics: &impl LinearDynamics,
-    settings: &ImplicitSettings,
     constraints: &[VelocityConstraint],
     ws: &mut ImplicitWorkspace,
 ) {
     if constraints.is_empty() {
         return;
     }
-    multiply_solution(dynamics, settings, ws);
+    multiply_solution(dynamics, ws);
     for (impulse, c) in ws.constraint_impulses.iter_mut().zip(constraints) {
         let i = c.particle as usize;
         *impulse += ws.product[i] - ws.rhs[i];
@@ -734,10 +745,9 @@ fn starts_warm(settings: &ImplicitSettings) -> bool {
 /// Sets `ws.delta` to the start [`WarmStart`] makes of the last solutions for the system
 /// as built, with the prescribed part; returns false where it has none. Its time counts
 /// as the solve's.
-fn projected_start(dynamics: &impl LinearDynamics, settings: &ImplicitSettings, ws: &mut ImplicitWorkspace) -> bool {
+fn projected_start(dynamics: &impl LinearDynamics, ws: &mut ImplicitWorkspace) -> bool {
     let started = Instant::now();
     let system = step_system(dynamics, &ws.system, -ws.spring_weights.stiffness);
-    let (springs, weights) = (springs_of(settings, dynamics), ws.spring_weights);
     let ImplicitWorkspace {
         warm_start,
         filter,
@@ -747,10 +757,11 @@ fn projected_start(dynamics: &impl LinearDynamics, settings: &ImplicitSettings, 
         residual,
         direction,
         delta,
-        spring_terms,
+        spring_couplings,
+        spring_relative,
         ..
     } = ws;
-    let multiply = |x: &[Vec3], out: &mut [Vec3]| multiply_system(system, springs, spring_terms, weights, x, out);
+    let multiply = |x: &[Vec3], out: &mut [Vec3]| multiply_system(system, spring_couplings, spring_relative, x, out);
     let products = [product.as_mut_slice(), residual, direction];
     let started_warm = warm_start.start(filter, rhs, prescribed, multiply, products, delta);
     ws.stages.solve += started.elapsed();
@@ -804,9 +815,7 @@ fn solve(
         Start::Given | Start::Projected => {}
     }
     let (pattern, couplings, springs) =
-        (dynamics.pattern(), dynamics.constant_couplings(), springs_of(settings, dynamics));
-    // None where the cloth does not collide with itself: no step of it has springs.
-    let springs = (dynamics.contact_surface().is_some() || !springs.is_empty()).then_some(springs);
+        (dynamics.pattern(), dynamics.constant_couplings(), possible_springs(settings, dynamics));
     let known = match start {
         Start::Zero => StartProduct::Zero,
         Start::Prescribed if ws.prescribed.is_empty() => StartProduct::Zero,
@@ -861,7 +870,7 @@ fn solve(
                 &mut ws.descent,
             );
             if held {
-                push_friction(dynamics, settings, x, scale, ws);
+                push_friction(dynamics, x, scale, ws);
             }
             sweeps
         }
@@ -883,19 +892,13 @@ fn solve(
 /// particle resting on a still layer of its cloth, whose plane held it within the sweeps
 /// ([`MotionBounds::resting_on`]), takes the layers' friction from its push the same way,
 /// relative to the layer under it.
-fn push_friction(
-    dynamics: &impl LinearDynamics,
-    settings: &ImplicitSettings,
-    x: &[Vec3],
-    h: f32,
-    ws: &mut ImplicitWorkspace,
-) {
+fn push_friction(dynamics: &impl LinearDynamics, x: &[Vec3], h: f32, ws: &mut ImplicitWorkspace) {
     let (bodies, others) = (dynamics.contact_bodies(), dynamics.contact_others());
     let layers = dynamics.layer_contact().zip(dynamics.contact_surface()).filter(|_| ws.motion_bounds.supported());
     if bodies.is_empty() && layers.is_none() {
         return;
     }
-    multiply_solution(dynamics, settings, ws);
+    multiply_solution(dynamics, ws);
     let (end, rhs, filter, motion_bounds) = (&ws.anchor, &ws.rhs, &ws.filter, &ws.motion_bounds);
     ws.product.par_iter_mut().enumerate().with_min_len(PARALLEL_MIN_LEN).for_each(|(i, change)| {
         let push = *change - rhs[i];
@@ -1001,13 +1004,17 @@ fn conjugate_gradient(
         multigrid,
         prepared,
         spring_weights,
-        spring_terms,
+        spring_couplings,
+        spring_relative,
         stages,
         ..
     } = ws;
     let weights = *spring_weights;
     let system = StepSystem::with_couplings(pattern, system, couplings, -weights.stiffness);
-    let (possible, springs) = (springs.map(|springs| (springs, weights)), springs.unwrap_or_default());
+    // The springs that may come, prepared: none where the cloth does not collide with itself.
+    let spring_couplings = &*spring_couplings;
+    let possible = springs.map(|_| spring_couplings);
+    let acting = (!spring_couplings.is_empty()).then_some(spring_couplings);
     if *prepared != Prepared::Ready {
         let preparing = Instant::now();
         let springs_changed = *prepared == Prepared::SpringsChanged;
@@ -1035,7 +1042,7 @@ fn conjugate_gradient(
         }),
         StartProduct::Formed | StartProduct::Unknown => {
             if known == StartProduct::Unknown {
-                multiply_system(system, springs, spring_terms, weights, delta, product);
+                multiply_system(system, spring_couplings, spring_relative, delta, product);
             }
             fused(residual, product, partials, |i, r, q| {
                 *r = filter.apply(i, rhs[i] - q);
@@ -1056,7 +1063,7 @@ fn conjugate_gradient(
     // z = M⁻¹ r, returning r·z.
     let precondition = |multigrid: &mut Multigrid, r: &[Vec3], z: &mut [Vec3], partials: &mut Vec<f64>| {
         if let Some(hierarchy) = hierarchy {
-            multigrid.apply(hierarchy, system, filter, r, z, possible);
+            multigrid.apply(hierarchy, system, filter, r, z, acting);
         }
         let jacobi = hierarchy.is_none().then_some(&*preconditioner);
         fused(z, r, partials, |i, z, r| {
@@ -1071,7 +1078,7 @@ fn conjugate_gradient(
     for iteration in 1..=settings.cg_max_iterations {
         // q = S A d, and d·q: the constant couplings' rows, if any, added in the pass that
         // filters.
-        multiply_system(StepSystem { far: None, ..system }, springs, spring_terms, weights, direction, product);
+        multiply_system(StepSystem { far: None, ..system }, spring_couplings, spring_relative, direction, product);
         let along = &*direction;
         let curvature = fused(product, along, partials, |i, q, d| {
             *q = filter.apply(i, system.far.map_or(*q, |far| *q + far.row_product(i, along)));

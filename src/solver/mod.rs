@@ -20,6 +20,7 @@ pub mod pins;
 pub mod pipeline;
 pub mod probes;
 pub mod reduce;
+pub mod spring_couplings;
 pub mod strain_limit;
 pub mod warm_start;
 

@@ -56,7 +56,6 @@ use glam::{Mat3, Mat3A, Vec3, Vec3A, Vec4};
 use rayon::prelude::*;
 
 use super::coarse_springs::CoarseSprings;
-use super::contact_springs::{Blocks, ContactSpring, SpringTerms, Weights, add_product, for_diagonal};
 use super::elements::block::{SymmetricBlock, block_product, by_parts, times};
 use super::elements::half::row_product;
 use super::elements::spring::{outer, skew};
@@ -64,6 +63,7 @@ use super::elements::{BlockPattern, HalfBlock, StoredBlock, SymmetricBlockMatrix
 use super::filter::{Filters, free_inverse};
 use super::implicit::StepSystem;
 use super::pipeline::pipelined;
+use super::spring_couplings::SpringCouplings;
 use super::{PARALLEL_MIN_LEN, add_rows};
 use crate::components::Csr;
 use crate::memory::release;
@@ -895,7 +895,7 @@ enum SpringPart<'a> {
     /// residual is not that of the system its coarse levels hold, and on fold_64 stepped
     /// as sphere_64_adaptive is the solves took 12 533 and 11 892 iterations from two
     /// starts against 9 364 and 8 998 (29 November 2026).
-    Couplings(&'a [ContactSpring], Weights),
+    Couplings(&'a SpringCouplings),
     /// On a coarse level, their terms ([`CoarseSprings`]).
     Terms(&'a CoarseSprings),
 }
@@ -909,9 +909,9 @@ fn finest_operator<'a>(
     fine: &'a SymmetricBlockMatrix,
     system: StepSystem<'a>,
     filter: &'a Filters,
-    springs: Option<(&'a [ContactSpring], Weights)>,
+    springs: Option<&'a SpringCouplings>,
 ) -> Operator<'a> {
-    let springs = springs.map(|(springs, weights)| SpringPart::Couplings(springs, weights));
+    let springs = acting(springs).map(SpringPart::Couplings);
     match (system.far, &hierarchy.fine) {
         (None, Some(pattern)) => Operator { pattern, matrix: fine, lumps: None, filter: Some(filter), springs },
         (far, _) => {
@@ -1037,7 +1037,7 @@ impl Operator<'_> {
 #[derive(Debug, Clone, Default)]
 struct Coupled {
     product: Vec<Vec3>,
-    terms: SpringTerms,
+    relative: Vec<Vec3>,
 }
 
 impl Coupled {
@@ -1050,12 +1050,7 @@ impl Coupled {
     /// The springs' part of `a` times `x`, if it has one.
     fn form(&mut self, a: &Operator, x: &[Vec3]) -> Option<&[Vec3]> {
         match a.springs? {
-            SpringPart::Couplings(springs, weights) => {
-                for &vertex in springs.iter().flat_map(|s| &s.stencil.vertices) {
-                    self.product[vertex as usize] = Vec3::ZERO;
-                }
-                add_product(springs, &mut self.terms, weights, Blocks::OffDiagonal, x, &mut self.product);
-            }
+            SpringPart::Couplings(couplings) => couplings.set_product(x, &mut self.relative, &mut self.product),
             SpringPart::Terms(terms) => terms.product(x, &mut self.product),
         }
         Some(&self.product)
@@ -1621,13 +1616,13 @@ impl Multigrid {
         system: StepSystem<'_>,
         filter: &Filters,
         positions: &[Vec3],
-        springs: Option<(&[ContactSpring], Weights)>,
+        springs: Option<&SpringCouplings>,
         springs_changed: bool,
     ) {
         let had_springs = self.couplings.iter().any(|c| !c.is_empty());
         let couplings = acting(springs);
         let n = system.pattern.rows();
-        let acting_springs = couplings.map_or(0, |(springs, _)| springs.iter().filter(|s| s.acts()).count());
+        let acting_springs = couplings.map_or(0, SpringCouplings::len);
         self.degree = if acting_springs * HEAP_SHARE >= n { HEAP_SMOOTHING_DEGREE } else { SMOOTHING_DEGREE };
         let lumped = match (system.far, &hierarchy.fine) {
             (None, Some(fine)) => Some(fine),
@@ -1642,9 +1637,9 @@ impl Multigrid {
             }
         }
         self.spring_diagonal.clear();
-        if let Some((springs, weights)) = springs {
+        if let Some(springs) = springs {
             self.spring_diagonal.resize(n, Mat3::ZERO);
-            for_diagonal(springs, weights, |i, block| self.spring_diagonal[i] += block);
+            springs.for_diagonal(|i, block| self.spring_diagonal[i] += block);
         }
         match (fine, lumped) {
             (Some(fine), _) => {
@@ -1679,11 +1674,14 @@ impl Multigrid {
             // Stale, another hierarchy, or a single level (the system is the coarsest).
             _ => self.setup(hierarchy, system, filter, Some(positions), springs),
         }
+        if let (Some(springs), Some(finest)) = (springs, self.levels.first_mut()) {
+            springs.reserve(&mut finest.coupled.relative);
+        }
     }
 
     /// With the coarse levels kept, forms the springs' terms for this system, and with
     /// them the coarse smoothers and the coarsest factor.
-    fn follow_springs(&mut self, hierarchy: &Hierarchy, springs: Option<(&[ContactSpring], Weights)>) {
+    fn follow_springs(&mut self, hierarchy: &Hierarchy, springs: Option<&SpringCouplings>) {
         let depth = hierarchy.coarsenings.len();
         for l in 0..depth {
             let (finer, coarser) = self.couplings.split_at_mut(l);
@@ -1733,7 +1731,7 @@ impl Multigrid {
         system: StepSystem<'_>,
         filter: &Filters,
         positions: Option<&[Vec3]>,
-        springs: Option<(&[ContactSpring], Weights)>,
+        springs: Option<&SpringCouplings>,
     ) {
         self.rebuild = false;
         self.fresh_iterations = None;
@@ -1795,7 +1793,7 @@ impl Multigrid {
         filter: &Filters,
         r: &[Vec3],
         z: &mut [Vec3],
-        springs: Option<(&[ContactSpring], Weights)>,
+        springs: Option<&SpringCouplings>,
     ) {
         let finest = finest_operator(hierarchy, &self.fine, system, filter, acting(springs));
         let coarse = Coarse { coarsenings: &hierarchy.coarsenings, matrices: &self.matrices, springs: &self.couplings };
@@ -1803,10 +1801,10 @@ impl Multigrid {
     }
 }
 
-/// The `springs` with their weights where any of them acts: those whose couplings the
-/// finest level's products take.
-fn acting(springs: Option<(&[ContactSpring], Weights)>) -> Option<(&[ContactSpring], Weights)> {
-    springs.filter(|(springs, _)| springs.iter().any(ContactSpring::acts))
+/// The `springs` where any of them acts: those whose couplings the finest level's
+/// products take.
+fn acting(springs: Option<&SpringCouplings>) -> Option<&SpringCouplings> {
+    springs.filter(|springs| !springs.is_empty())
 }
 
 /// Sets `out` to the springs' sum on the coarse level of `coarsening`, through the
@@ -1817,7 +1815,7 @@ fn restrict_springs(
     coarsening: &Coarsening,
     prolongation: &Prolongation,
     finer: Option<&CoarseSprings>,
-    springs: Option<(&[ContactSpring], Weights)>,
+    springs: Option<&SpringCouplings>,
     out: &mut CoarseSprings,
 ) {
     let p = &coarsening.prolongation;
@@ -1829,7 +1827,7 @@ fn restrict_springs(
     let nodes = coarsening.coarse.rows();
     match (springs, finer) {
         (None, _) => out.clear_terms(),
-        (Some((springs, weights)), None) => out.restrict_springs(springs, weights, nodes, row),
+        (Some(springs), None) => out.restrict_springs(springs, nodes, row),
         (Some(_), Some(finer)) => out.restrict(finer, nodes, row),
     }
 }
@@ -1939,7 +1937,14 @@ impl CoarsestSolver {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solver::contact_springs::{Outside, Stencil, add_diagonal};
+    use crate::solver::contact_springs::{ContactSpring, Outside, Stencil, Weights, add_diagonal};
+
+    /// The `springs`' couplings over `n` vertices at `weights`, prepared.
+    fn couplings(springs: &[ContactSpring], weights: Weights, n: usize) -> SpringCouplings {
+        let mut couplings = SpringCouplings::default();
+        couplings.prepare(Some(springs), weights, n);
+        couplings
+    }
     use crate::solver::elements::ConstantCouplings;
 
     /// An `n × n` grid of unit spacing, each quad split along one diagonal, as the system
@@ -2338,7 +2343,8 @@ mod tests {
         let prepared =
             |multigrid: &mut Multigrid, system: &SymmetricBlockMatrix, springs: &[ContactSpring], changed| {
                 let step = StepSystem::new(&pattern, system);
-                multigrid.prepare(&hierarchy, step, &filter, &positions, Some((springs, weights)), changed);
+                let springs = couplings(springs, weights, rows);
+                multigrid.prepare(&hierarchy, step, &filter, &positions, Some(&springs), changed);
             };
         let (mut followed, mut formed) = (Multigrid::default(), Multigrid::default());
         prepared(&mut followed, &system_before, &before, false);
@@ -2404,12 +2410,13 @@ mod tests {
         let (last, mut last_system) = (&springs[..20], system.clone());
         add_diagonal(last, weights, &pattern, &mut last_system);
         let prepare = |multigrid: &mut Multigrid, system, springs, changed| {
+            let springs = couplings(springs, weights, n);
             multigrid.prepare(
                 &hierarchy,
                 StepSystem::new(&pattern, system),
                 &filter,
                 &positions,
-                Some((springs, weights)),
+                Some(&springs),
                 changed,
             );
         };
@@ -2428,7 +2435,7 @@ mod tests {
             system.multiply(&pattern, &fine, &mut product);
             // The springs' diagonal blocks alone, before their couplings are added.
             let diagonal_only = product.clone();
-            add_product(&springs, &mut SpringTerms::default(), weights, Blocks::OffDiagonal, &fine, &mut product);
+            couplings(&springs, weights, n).add_product(&fine, &mut Vec::new(), &mut product);
             let (error, scale) = galerkin_error(coarse, &x, coarsening, &level.prolongation, &product);
             assert!(error < 1e-4 * scale, "coarse product off by {error} of {scale}");
             // Against the springs' diagonal blocks alone, it differs.
@@ -2526,14 +2533,15 @@ mod tests {
         let filter = Filters::free(n);
         // The upper layer pressed down.
         let b: Vec<Vec3> = (0..n).map(|i| if i >= n / 2 { -Vec3::Z } else { Vec3::ZERO }).collect();
+        let prepared = couplings(&springs, weights, n);
         let multiply = |x: &[Vec3]| {
             let mut product = vec![Vec3::ZERO; n];
             system.multiply(&pattern, x, &mut product);
-            add_product(&springs, &mut SpringTerms::default(), weights, Blocks::OffDiagonal, x, &mut product);
+            prepared.add_product(x, &mut Vec::new(), &mut product);
             product
         };
         // Conjugate gradients preconditioned by the V-cycle, to a relative residual of 10⁻⁶.
-        let iterations = |with_springs: Option<(&[ContactSpring], Weights)>, degree: usize| {
+        let iterations = |with_springs: Option<&SpringCouplings>, degree: usize| {
             let mut multigrid = Multigrid::default();
             let step = StepSystem::new(&pattern, &system);
             multigrid.prepare(&hierarchy, step, &filter, &positions, with_springs, false);
@@ -2564,9 +2572,9 @@ mod tests {
         };
         // Both smoothed as a heap (the layers touch), and the springs whole as their
         // smoothing would be on a free sheet.
-        let whole = iterations(Some((&springs, weights)), HEAP_SMOOTHING_DEGREE);
+        let whole = iterations(Some(&prepared), HEAP_SMOOTHING_DEGREE);
         let diagonal = iterations(None, HEAP_SMOOTHING_DEGREE);
-        let free = iterations(Some((&springs, weights)), SMOOTHING_DEGREE);
+        let free = iterations(Some(&prepared), SMOOTHING_DEGREE);
         assert!(
             10 * whole < 9 * diagonal,
             "{whole} iterations with the springs whole, {diagonal} with their diagonal alone"

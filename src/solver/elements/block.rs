@@ -357,6 +357,39 @@ pub(crate) fn by_parts<T: Send>(
     });
 }
 
+/// Cuts the ascending `rows` (of `nodes`) into parts of about equal work, row `k` taking
+/// `work(k)` of `total`: at most `max_parts`, and none under `part_work` but the only
+/// one. Part `p` holds `rows[part_rows[p]..part_rows[p + 1]]`, the nodes from `bounds[p]`
+/// to `bounds[p + 1]`, for [`by_parts`].
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn cut_parts(
+    rows: &[u32],
+    nodes: usize,
+    total: usize,
+    part_work: usize,
+    max_parts: usize,
+    work: impl Fn(usize) -> usize,
+    part_rows: &mut Vec<usize>,
+    bounds: &mut Vec<usize>,
+) {
+    let parts = total.div_ceil(part_work).clamp(1, max_parts);
+    part_rows.clear();
+    part_rows.push(0);
+    bounds.clear();
+    bounds.push(0);
+    let mut done = 0;
+    for (k, &row) in rows.iter().enumerate() {
+        let cuts = part_rows.len();
+        if cuts < parts && k > 0 && done * parts >= cuts * total {
+            part_rows.push(k);
+            bounds.push(row as usize);
+        }
+        done += work(k);
+    }
+    part_rows.push(rows.len());
+    bounds.push(nodes);
+}
+
 /// [`by_parts`] with one item of `kept` for each part (as many as the parts, which must
 /// not be empty): `work(part, rows, values, kept)` gets its own beside its values, such as
 /// a part's scratch and the lists it fills.
