@@ -1014,7 +1014,6 @@ fn conjugate_gradient(
     // The springs that may come, prepared: none where the cloth does not collide with itself.
     let spring_couplings = &*spring_couplings;
     let possible = springs.map(|_| spring_couplings);
-    let acting = (!spring_couplings.is_empty()).then_some(spring_couplings);
     if *prepared != Prepared::Ready {
         let preparing = Instant::now();
         let springs_changed = *prepared == Prepared::SpringsChanged;
@@ -1063,7 +1062,7 @@ fn conjugate_gradient(
     // z = M⁻¹ r, returning r·z.
     let precondition = |multigrid: &mut Multigrid, r: &[Vec3], z: &mut [Vec3], partials: &mut Vec<f64>| {
         if let Some(hierarchy) = hierarchy {
-            multigrid.apply(hierarchy, system, filter, r, z, acting);
+            multigrid.apply(hierarchy, system, filter, r, z, possible);
         }
         let jacobi = hierarchy.is_none().then_some(&*preconditioner);
         fused(z, r, partials, |i, z, r| {

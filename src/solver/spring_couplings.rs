@@ -7,8 +7,7 @@
 //! springs' blocks were formed again each time from their normals, and their terms were
 //! added to the vertices on one thread, spring by spring, while the other waited: a heap
 //! of two cloths (`untangle_layers`, some 3 000 springs on 1 250 particles) spent a
-//! sixth of its run there, and a V-cycle over a heap of 1 024 particles took as long on
-//! two threads as on one.
+//! sixth of its run there.
 //!
 //! Prepared with the system, the blocks are kept, and each vertex knows its springs in
 //! spring order: a product forms the pairs' relative motions in parallel, then each vertex
@@ -128,7 +127,6 @@ impl SpringCouplings {
                 self.count[vertex] += 1;
             }
         }
-        let weighted: usize = self.stencils.iter().map(|s| s.weighted().count()).sum();
         // Each count becomes its vertex's first place in `terms`.
         for (vertex, count) in self.count.iter_mut().enumerate().filter(|(_, count)| **count > 0) {
             let start = *self.offsets.last().expect("begins at zero");
@@ -136,7 +134,7 @@ impl SpringCouplings {
             self.offsets.push(start + *count);
             *count = start;
         }
-        self.terms.resize(weighted, (0, 0.0));
+        self.terms.resize(*self.offsets.last().expect("begins at zero") as usize, (0, 0.0));
         for (s, stencil) in self.stencils.iter().enumerate() {
             for (_, vertex, weight) in stencil.weighted() {
                 let place = &mut self.count[vertex];
