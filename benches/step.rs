@@ -102,9 +102,9 @@ impl Sheet {
 /// 1000 N/m, bending 1e-5 N·m, 0.2 kg/m²): force evaluation, the per-frame probes
 /// (potential energy, largest strain, self-intersection count), derivative assembly, one
 /// symmetric block-descent sweep and one multigrid V-cycle over the implicit-Euler system
-/// at 1/60 s, the multigrid's prepare and V-cycle with contact springs as in a heap, and
-/// whole steps of three integrators, each timed on a worker of rayon's
-/// pool ([`on_pool`]); and the forces and derivatives again with `law: Quadratic`.
+/// at 1/60 s, the contact springs' product, the multigrid's prepare and V-cycle with
+/// them as in a heap, and whole steps of three integrators, each timed on a worker of
+/// rayon's pool ([`on_pool`]); and the forces and derivatives again with `law: Quadratic`.
 fn kernels(c: &mut Criterion) {
     let mut group = c.benchmark_group("kernels");
     group.sample_size(20);
@@ -187,6 +187,11 @@ fn kernels(c: &mut Criterion) {
         let heap_at = StepSystem::new(pattern, &heap);
         let mut couplings = SpringCouplings::default();
         couplings.prepare(Some(&springs), weights, count);
+        // Their off-diagonal blocks' product, which each product of the heap's system adds.
+        let mut pushes = Vec::new();
+        group.bench_function(BenchmarkId::new("springs_product", &size), |b| {
+            on_pool(b, || couplings.set_product(black_box(&rhs), &mut pushes, &mut delta));
+        });
         let mut multigrid = Multigrid::default();
         multigrid.prepare(hierarchy, heap_at, &filter, &x, Some(&couplings), false);
         group.bench_function(BenchmarkId::new("multigrid/springs_changed", &size), |b| {

@@ -179,9 +179,9 @@ pub struct ImplicitWorkspace {
     /// The contact springs' terms of the assembly's products and forces.
     spring_terms: SpringTerms,
     /// The acting contact springs' couplings in the system's products, prepared with the
-    /// system, and their relative motions in a product.
+    /// system, and their pushes in a product.
     spring_couplings: SpringCouplings,
-    spring_relative: Vec<Vec3>,
+    spring_pushes: Vec<Vec3>,
     /// Per chunk of [`VECTOR_CHUNK`] particles, the partial sums of the CG's dot products.
     partials: Vec<f64>,
     /// Per particle, the directions its Δv may take: identity (free), zero (pinned) or a
@@ -636,22 +636,22 @@ fn possible_springs<'a>(settings: &ImplicitSettings, dynamics: &'a impl LinearDy
 }
 
 /// `out = A y`: the matrix, and the contact springs' off-diagonal blocks weighted as
-/// stiffness and damping are in `A` (`couplings`, with `relative` as their scratch).
+/// stiffness and damping are in `A` (`couplings`, with `pushes` as their scratch).
 fn multiply_system(
     system: StepSystem<'_>,
     couplings: &SpringCouplings,
-    relative: &mut Vec<Vec3>,
+    pushes: &mut Vec<Vec3>,
     y: &[Vec3],
     out: &mut [Vec3],
 ) {
     system.multiply(y, out);
-    couplings.add_product(y, relative, out);
+    couplings.add_product(y, pushes, out);
 }
 
 /// `ws.product = A δ`: the system, with its contact springs, times the last solution.
 fn multiply_solution(dynamics: &impl LinearDynamics, ws: &mut ImplicitWorkspace) {
     let system = step_system(dynamics, &ws.system, -ws.spring_weights.stiffness);
-    multiply_system(system, &ws.spring_couplings, &mut ws.spring_relative, &ws.delta, &mut ws.product);
+    multiply_system(system, &ws.spring_couplings, &mut ws.spring_pushes, &ws.delta, &mut ws.product);
 }
 
 fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
@@ -758,10 +758,10 @@ fn projected_start(dynamics: &impl LinearDynamics, ws: &mut ImplicitWorkspace) -
         direction,
         delta,
         spring_couplings,
-        spring_relative,
+        spring_pushes,
         ..
     } = ws;
-    let multiply = |x: &[Vec3], out: &mut [Vec3]| multiply_system(system, spring_couplings, spring_relative, x, out);
+    let multiply = |x: &[Vec3], out: &mut [Vec3]| multiply_system(system, spring_couplings, spring_pushes, x, out);
     let products = [product.as_mut_slice(), residual, direction];
     let started_warm = warm_start.start(filter, rhs, prescribed, multiply, products, delta);
     ws.stages.solve += started.elapsed();
@@ -1005,7 +1005,7 @@ fn conjugate_gradient(
         prepared,
         spring_weights,
         spring_couplings,
-        spring_relative,
+        spring_pushes,
         stages,
         ..
     } = ws;
@@ -1041,7 +1041,7 @@ fn conjugate_gradient(
         }),
         StartProduct::Formed | StartProduct::Unknown => {
             if known == StartProduct::Unknown {
-                multiply_system(system, spring_couplings, spring_relative, delta, product);
+                multiply_system(system, spring_couplings, spring_pushes, delta, product);
             }
             fused(residual, product, partials, |i, r, q| {
                 *r = filter.apply(i, rhs[i] - q);
@@ -1077,7 +1077,7 @@ fn conjugate_gradient(
     for iteration in 1..=settings.cg_max_iterations {
         // q = S A d, and d·q: the constant couplings' rows, if any, added in the pass that
         // filters.
-        multiply_system(StepSystem { far: None, ..system }, spring_couplings, spring_relative, direction, product);
+        multiply_system(StepSystem { far: None, ..system }, spring_couplings, spring_pushes, direction, product);
         let along = &*direction;
         let curvature = fused(product, along, partials, |i, q, d| {
             *q = filter.apply(i, system.far.map_or(*q, |far| *q + far.row_product(i, along)));

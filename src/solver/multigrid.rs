@@ -1037,7 +1037,7 @@ impl Operator<'_> {
 #[derive(Debug, Clone, Default)]
 struct Coupled {
     product: Vec<Vec3>,
-    relative: Vec<Vec3>,
+    pushes: Vec<Vec3>,
 }
 
 impl Coupled {
@@ -1050,7 +1050,7 @@ impl Coupled {
     /// The springs' part of `a` times `x`, if it has one.
     fn form(&mut self, a: &Operator, x: &[Vec3]) -> Option<&[Vec3]> {
         match a.springs? {
-            SpringPart::Couplings(couplings) => couplings.set_product(x, &mut self.relative, &mut self.product),
+            SpringPart::Couplings(couplings) => couplings.set_product(x, &mut self.pushes, &mut self.product),
             SpringPart::Terms(terms) => terms.product(x, &mut self.product),
         }
         Some(&self.product)
@@ -1675,7 +1675,7 @@ impl Multigrid {
             _ => self.setup(hierarchy, system, filter, Some(positions), springs),
         }
         if let (Some(springs), Some(finest)) = (springs, self.levels.first_mut()) {
-            springs.reserve(&mut finest.coupled.relative);
+            springs.reserve(&mut finest.coupled.pushes);
         }
     }
 
