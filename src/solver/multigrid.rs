@@ -1639,7 +1639,9 @@ impl Multigrid {
         self.spring_diagonal.clear();
         if let Some(springs) = springs {
             self.spring_diagonal.resize(n, Mat3::ZERO);
-            springs.for_diagonal(|i, block| self.spring_diagonal[i] += block);
+            for (i, block) in springs.diagonals() {
+                self.spring_diagonal[i] = block;
+            }
         }
         match (fine, lumped) {
             (Some(fine), _) => {

@@ -102,15 +102,11 @@ impl SpringCouplings {
         self.stencils.iter().zip(self.blocks.iter().copied())
     }
 
-    /// Calls `visit(vertex, block)` with each diagonal block of the springs' couplings,
-    /// `w_k² B`, spring by spring in order: those that are in the system's matrix
+    /// Each reached vertex with the sum of its diagonal blocks from the springs' couplings,
+    /// `Σ w_k² B`, kept from the indexing: the blocks that are in the system's matrix
     /// ([`super::contact_springs::add_diagonal`]).
-    pub fn for_diagonal(&self, mut visit: impl FnMut(usize, Mat3)) {
-        for (stencil, block) in self.springs() {
-            for (_, vertex, weight) in stencil.weighted() {
-                visit(vertex, weight * weight * block);
-            }
-        }
+    pub fn diagonals(&self) -> impl Iterator<Item = (usize, Mat3)> + '_ {
+        self.reached.iter().map(|&vertex| vertex as usize).zip(self.diagonal.iter().copied())
     }
 
     /// Indexes the springs' weighted vertices by vertex, each vertex's in spring order
@@ -289,7 +285,9 @@ mod tests {
         }
         // The diagonal blocks it gives are those in the matrix.
         let mut diagonal = vec![Mat3::ZERO; vertices];
-        couplings.for_diagonal(|i, block| diagonal[i] += block);
+        for (i, block) in couplings.diagonals() {
+            diagonal[i] = block;
+        }
         for (i, block) in diagonal.iter().enumerate() {
             assert_eq!(*block, matrix.diagonal(&pattern, i), "vertex {i}");
         }
