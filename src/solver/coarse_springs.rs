@@ -113,19 +113,21 @@ impl CoarseSprings {
         row: impl Fn(usize, &mut dyn FnMut(u32, Mat3)),
     ) {
         self.clear();
-        let mut entries = std::mem::take(&mut self.gathered);
+        let (mut entries, mut slot) = (std::mem::take(&mut self.gathered), std::mem::take(&mut self.slot));
+        slot.clear();
+        slot.resize(nodes, u32::MAX);
         for (stencil, spring) in springs.springs() {
             entries.clear();
             for (&vertex, &weight) in stencil.vertices.iter().zip(&stencil.weights) {
-                row(vertex as usize, &mut |column, block| entries.push((column, weight * block)));
+                row(vertex as usize, &mut |column, block| accumulate(&mut slot, &mut entries, column, weight * block));
             }
-            for e in self.push_left(&mut entries) {
+            for e in self.push_left(&mut entries, &mut slot) {
                 self.right_nodes.push(self.nodes[e]);
                 self.right_blocks.push(spring * self.blocks[e]);
             }
             self.right_offsets.push(self.right_nodes.len() as u32);
         }
-        self.gathered = entries;
+        (self.gathered, self.slot) = (entries, slot);
         self.index(nodes);
     }
 
@@ -141,8 +143,8 @@ impl CoarseSprings {
         slot.resize(nodes, u32::MAX);
         for (c, blocks) in finer.rows() {
             entries.clear();
-            row(c, &mut |column, block| entries.push((column, block)));
-            self.push_left(&mut entries);
+            row(c, &mut |column, block| accumulate(&mut slot, &mut entries, column, block));
+            self.push_left(&mut entries, &mut slot);
             product.clear();
             for &(f, m) in blocks {
                 row(f as usize, &mut |column, block| accumulate(&mut slot, &mut product, column, m * block));
@@ -195,23 +197,20 @@ impl CoarseSprings {
         self.right_offsets[t] as usize..self.right_offsets[t + 1] as usize
     }
 
-    /// Appends the left entries of a new term, `entries`, whose blocks at the same node
-    /// are added (in the order given), and returns where they lie.
-    fn push_left(&mut self, entries: &mut [(u32, Mat3)]) -> std::ops::Range<usize> {
-        entries.sort_by_key(|&(node, _)| node);
-        let start = self.nodes.len();
-        for &(node, block) in entries.iter() {
-            match self.nodes[start..].last() {
-                Some(&last) if last == node => {
-                    let at = self.blocks.len() - 1;
-                    self.blocks[at] += block;
-                }
-                _ => {
-                    self.nodes.push(node);
-                    self.blocks.push(block);
-                }
-            }
+    /// Appends the left entries of a new term, `entries`, each node once (their blocks
+    /// added by [`accumulate`] in the order given, which leaves their places in `slot`,
+    /// here set back to `u32::MAX`), in ascending order of node, and returns where they
+    /// lie. Gathered by node before they are sorted, the entries of a spring's four rows
+    /// of the prolongator (some 30) are sorted once each, not moved about as they merge.
+    fn push_left(&mut self, entries: &mut [(u32, Mat3)], slot: &mut [u32]) -> std::ops::Range<usize> {
+        for &(node, _) in entries.iter() {
+            slot[node as usize] = u32::MAX;
         }
+        // Each node once, so no order among equals is left to the sort.
+        entries.sort_unstable_by_key(|&(node, _)| node);
+        let start = self.nodes.len();
+        self.nodes.extend(entries.iter().map(|&(node, _)| node));
+        self.blocks.extend(entries.iter().map(|&(_, block)| block));
         self.offsets.push(self.nodes.len() as u32);
         start..self.nodes.len()
     }
