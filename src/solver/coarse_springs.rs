@@ -21,10 +21,12 @@
 //! are formed for every system, while the Galerkin matrices are kept for as long as they
 //! serve.
 
+use super::contact_springs::Stencil;
 use super::elements::block::{by_parts, by_parts_keeping, cut_parts, times};
 use super::gather::{FLOOR, reserve_floored};
 use super::spring_couplings::SpringCouplings;
 use glam::{Mat3, Vec3, Vec3A};
+use rayon::prelude::*;
 
 /// Entries a term is given room for: its nodes on a coarse level, where its four
 /// vertices' rows of the prolongator reach a few aggregates each (two nodes an aggregate).
@@ -39,6 +41,11 @@ const PART_WORK: usize = 4096;
 
 /// The blocks a sum holds from which its product runs its parts in parallel.
 const PARALLEL_BLOCKS: usize = 16_384;
+
+/// Springs whose terms one task forms ([`CoarseSprings::restrict_springs`]): each takes
+/// four rows of the prolongator and a block product per node it reaches, a microsecond or
+/// so, so that a run outweighs its task.
+const RUN_SPRINGS: usize = 256;
 
 /// The contact springs' couplings on a coarse level, `Σ Lᵀ R` over terms each a few
 /// nodes wide, summed into a sparse matrix over the nodes they reach, with what a
@@ -83,13 +90,12 @@ pub struct CoarseSprings {
     /// Per node, its diagonal block of the sum and the block with its partner in a pair
     /// (node `c ^ 1`).
     near: Vec<[Mat3; 2]>,
-    /// Scratch, kept so that a step allocates nothing: a term's left and right entries as
-    /// they are gathered, each node's next place in `at`, and each node's place in the row
-    /// of `P` times the finer sum being formed (`u32::MAX` where the row has none).
-    gathered: Vec<(u32, Mat3)>,
-    accumulated: Vec<(u32, Mat3)>,
+    /// The terms formed in runs, each on a task of its own, then appended in order to the
+    /// lists above: the same lists on any number of threads. Formed one after another,
+    /// they were most of the multigrid's preparation on a crowded heap.
+    runs: Vec<TermRun>,
+    /// Scratch, kept so that a step allocates nothing: each node's next place in `at`.
     next: Vec<u32>,
-    slot: Vec<u32>,
 }
 
 impl CoarseSprings {
@@ -105,59 +111,63 @@ impl CoarseSprings {
     /// Sets the sum of the first coarse level (`nodes` of them) from the acting `springs`
     /// as weighted in the system, given the rows of the finest level's filtered
     /// prolongator `S P`: `row(i, visit)` calls `visit(column, block)` for each block of
-    /// row `i`.
+    /// row `i`. Runs of [`RUN_SPRINGS`] springs form their terms in parallel.
     pub fn restrict_springs(
         &mut self,
         springs: &SpringCouplings,
         nodes: usize,
-        row: impl Fn(usize, &mut dyn FnMut(u32, Mat3)),
+        row: impl Fn(usize, &mut dyn FnMut(u32, Mat3)) + Sync,
     ) {
-        self.clear();
-        let (mut entries, mut slot) = (std::mem::take(&mut self.gathered), std::mem::take(&mut self.slot));
-        slot.clear();
-        slot.resize(nodes, u32::MAX);
-        for (stencil, spring) in springs.springs() {
-            entries.clear();
-            for (&vertex, &weight) in stencil.vertices.iter().zip(&stencil.weights) {
-                row(vertex as usize, &mut |column, block| accumulate(&mut slot, &mut entries, column, weight * block));
+        let count = springs.len();
+        let runs = count.div_ceil(RUN_SPRINGS).clamp(1, MAX_PARTS);
+        self.form_runs(runs, nodes, |r, run| {
+            for (stencil, spring) in springs.springs_in(r * count / runs..(r + 1) * count / runs) {
+                run.push_spring(stencil, spring, &row);
             }
-            for e in self.push_left(&mut entries, &mut slot) {
-                self.right_nodes.push(self.nodes[e]);
-                self.right_blocks.push(spring * self.blocks[e]);
-            }
-            self.right_offsets.push(self.right_nodes.len() as u32);
-        }
-        (self.gathered, self.slot) = (entries, slot);
+        });
         self.index(nodes);
     }
 
     /// Sets the sum to `finer`'s restricted to the next coarser level (`nodes` of them),
     /// `Pᵀ M P`, given the rows of the prolongator `P` between them, as
     /// [`CoarseSprings::restrict_springs`]: a term for each row `c` the finer sum has, its
-    /// row of `P` on the left and `(M P)_c` on the right.
-    pub fn restrict(&mut self, finer: &CoarseSprings, nodes: usize, row: impl Fn(usize, &mut dyn FnMut(u32, Mat3))) {
-        self.clear();
-        let (mut entries, mut product) = (std::mem::take(&mut self.gathered), std::mem::take(&mut self.accumulated));
-        let mut slot = std::mem::take(&mut self.slot);
-        slot.clear();
-        slot.resize(nodes, u32::MAX);
-        for (c, blocks) in finer.rows() {
-            entries.clear();
-            row(c, &mut |column, block| accumulate(&mut slot, &mut entries, column, block));
-            self.push_left(&mut entries, &mut slot);
-            product.clear();
-            for &(f, m) in blocks {
-                row(f as usize, &mut |column, block| accumulate(&mut slot, &mut product, column, m * block));
+    /// row of `P` on the left and `(M P)_c` on the right, the rows of each of the finer
+    /// sum's parts in a run of their own.
+    pub fn restrict(
+        &mut self,
+        finer: &CoarseSprings,
+        nodes: usize,
+        row: impl Fn(usize, &mut dyn FnMut(u32, Mat3)) + Sync,
+    ) {
+        let runs = finer.bounds.len().saturating_sub(1);
+        self.form_runs(runs, nodes, |r, run| {
+            for (c, blocks) in finer.part(r) {
+                run.push_row(c, blocks, &row);
             }
-            for &(column, block) in &product {
-                slot[column as usize] = u32::MAX;
-                self.right_nodes.push(column);
-                self.right_blocks.push(block);
-            }
-            self.right_offsets.push(self.right_nodes.len() as u32);
-        }
-        (self.gathered, self.accumulated, self.slot) = (entries, product, slot);
+        });
         self.index(nodes);
+    }
+
+    /// Clears the terms, lets `form(r, run)` form the terms of each of `runs` runs over
+    /// `nodes` nodes in parallel, and appends them in order of run.
+    fn form_runs(&mut self, runs: usize, nodes: usize, form: impl Fn(usize, &mut TermRun) + Sync) {
+        self.clear();
+        if self.runs.len() < runs {
+            self.runs.resize_with(runs, TermRun::default);
+        }
+        self.runs[..runs].par_iter_mut().enumerate().for_each(|(r, run)| {
+            run.clear(nodes);
+            form(r, run);
+        });
+        for run in &self.runs[..runs] {
+            let (left, right) = (self.nodes.len() as u32, self.right_nodes.len() as u32);
+            self.offsets.extend(run.ends.iter().map(|&(l, _)| left + l));
+            self.right_offsets.extend(run.ends.iter().map(|&(_, r)| right + r));
+            self.nodes.extend_from_slice(&run.nodes);
+            self.blocks.extend_from_slice(&run.blocks);
+            self.right_nodes.extend_from_slice(&run.right_nodes);
+            self.right_blocks.extend_from_slice(&run.right_blocks);
+        }
     }
 
     /// Leaves no terms (no spring acts).
@@ -183,10 +193,6 @@ impl CoarseSprings {
         reserve_floored(&mut self.blocks, FLOOR * ENTRIES);
         self.right_blocks.clear();
         reserve_floored(&mut self.right_blocks, FLOOR * ENTRIES);
-        self.gathered.clear();
-        reserve_floored(&mut self.gathered, 4 * ENTRIES);
-        self.accumulated.clear();
-        reserve_floored(&mut self.accumulated, 4 * ENTRIES);
     }
 
     fn entries(&self, t: usize) -> std::ops::Range<usize> {
@@ -195,24 +201,6 @@ impl CoarseSprings {
 
     fn right_entries(&self, t: usize) -> std::ops::Range<usize> {
         self.right_offsets[t] as usize..self.right_offsets[t + 1] as usize
-    }
-
-    /// Appends the left entries of a new term, `entries`, each node once (their blocks
-    /// added by [`accumulate`] in the order given, which leaves their places in `slot`,
-    /// here set back to `u32::MAX`), in ascending order of node, and returns where they
-    /// lie. Gathered by node before they are sorted, the entries of a spring's four rows
-    /// of the prolongator (some 30) are sorted once each, not moved about as they merge.
-    fn push_left(&mut self, entries: &mut [(u32, Mat3)], slot: &mut [u32]) -> std::ops::Range<usize> {
-        for &(node, _) in entries.iter() {
-            slot[node as usize] = u32::MAX;
-        }
-        // Each node once, so no order among equals is left to the sort.
-        entries.sort_unstable_by_key(|&(node, _)| node);
-        let start = self.nodes.len();
-        self.nodes.extend(entries.iter().map(|&(node, _)| node));
-        self.blocks.extend(entries.iter().map(|&(_, block)| block));
-        self.offsets.push(self.nodes.len() as u32);
-        start..self.nodes.len()
     }
 
     /// Indexes the left entries by node, and sums the terms.
@@ -368,6 +356,104 @@ impl CoarseSprings {
                 out[c - nodes.start] = row(blocks);
             }
         });
+    }
+}
+
+/// Terms formed on a task of their own: their entries as [`CoarseSprings`] keeps them,
+/// with ends counted from the run's start, and the scratch that forms them.
+#[derive(Debug, Clone, Default)]
+struct TermRun {
+    /// Per term, the ends of its left and right entries in the run's lists.
+    ends: Vec<(u32, u32)>,
+    nodes: Vec<u32>,
+    blocks: Vec<Mat3>,
+    right_nodes: Vec<u32>,
+    right_blocks: Vec<Mat3>,
+    /// A term's left entries as they are gathered, the row of `P` times the finer sum
+    /// being formed, and each node's place in whichever is being gathered (`u32::MAX`
+    /// where it has none).
+    gathered: Vec<(u32, Mat3)>,
+    accumulated: Vec<(u32, Mat3)>,
+    slot: Vec<u32>,
+}
+
+impl TermRun {
+    /// Removes the terms, keeping their storage, with the room [`CoarseSprings::clear`]
+    /// makes, for terms over `nodes` nodes.
+    fn clear(&mut self, nodes: usize) {
+        self.ends.clear();
+        reserve_floored(&mut self.ends, FLOOR);
+        for nodes in [&mut self.nodes, &mut self.right_nodes] {
+            nodes.clear();
+            reserve_floored(nodes, FLOOR * ENTRIES);
+        }
+        for blocks in [&mut self.blocks, &mut self.right_blocks] {
+            blocks.clear();
+            reserve_floored(blocks, FLOOR * ENTRIES);
+        }
+        for scratch in [&mut self.gathered, &mut self.accumulated] {
+            scratch.clear();
+            reserve_floored(scratch, 4 * ENTRIES);
+        }
+        self.slot.clear();
+        self.slot.resize(nodes, u32::MAX);
+    }
+
+    /// Appends a spring's term: `Q`, its stencil's rows of the prolongator weighted, on
+    /// the left, and `B Q` on the right.
+    fn push_spring(&mut self, stencil: &Stencil, spring: Mat3, row: &impl Fn(usize, &mut dyn FnMut(u32, Mat3))) {
+        let Self { gathered, slot, .. } = self;
+        gathered.clear();
+        for (&vertex, &weight) in stencil.vertices.iter().zip(&stencil.weights) {
+            row(vertex as usize, &mut |column, block| accumulate(slot, gathered, column, weight * block));
+        }
+        for e in self.push_left() {
+            self.right_nodes.push(self.nodes[e]);
+            self.right_blocks.push(spring * self.blocks[e]);
+        }
+        self.end_term();
+    }
+
+    /// Appends the term of the finer sum's row `c`, its `blocks`: the row of `P` on the
+    /// left, `(M P)_c` on the right.
+    fn push_row(&mut self, c: usize, blocks: &[(u32, Mat3)], row: &impl Fn(usize, &mut dyn FnMut(u32, Mat3))) {
+        let Self { gathered, slot, .. } = self;
+        gathered.clear();
+        row(c, &mut |column, block| accumulate(slot, gathered, column, block));
+        self.push_left();
+        let Self { accumulated, slot, .. } = self;
+        accumulated.clear();
+        for &(f, m) in blocks {
+            row(f as usize, &mut |column, block| accumulate(slot, accumulated, column, m * block));
+        }
+        for &(column, block) in &*accumulated {
+            slot[column as usize] = u32::MAX;
+            self.right_nodes.push(column);
+            self.right_blocks.push(block);
+        }
+        self.end_term();
+    }
+
+    /// Appends the gathered left entries of a new term, each node once (their blocks added
+    /// by [`accumulate`] in the order given, which left their places in `slot`, here set
+    /// back), in ascending order of node, and returns where they lie. Gathered by node
+    /// before they are sorted, the entries of a spring's four rows of the prolongator
+    /// (some 30) are sorted once each, not moved about as they merge.
+    fn push_left(&mut self) -> std::ops::Range<usize> {
+        for &(node, _) in &self.gathered {
+            self.slot[node as usize] = u32::MAX;
+        }
+        // Each node once, so no order among equals is left to the sort.
+        self.gathered.sort_unstable_by_key(|&(node, _)| node);
+        let start = self.nodes.len();
+        self.nodes.extend(self.gathered.iter().map(|&(node, _)| node));
+        self.blocks.extend(self.gathered.iter().map(|&(_, block)| block));
+        start..self.nodes.len()
+    }
+
+    /// Ends the term whose entries were appended last.
+    fn end_term(&mut self) {
+        self.ends.push((self.nodes.len() as u32, self.right_nodes.len() as u32));
     }
 }
 

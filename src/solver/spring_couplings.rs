@@ -99,7 +99,12 @@ impl SpringCouplings {
 
     /// The acting springs' stencils and blocks, in the springs' order.
     pub fn springs(&self) -> impl Iterator<Item = (&Stencil, Mat3)> {
-        self.stencils.iter().zip(self.blocks.iter().copied())
+        self.springs_in(0..self.len())
+    }
+
+    /// The acting springs `range` of [`SpringCouplings::springs`].
+    pub fn springs_in(&self, range: std::ops::Range<usize>) -> impl Iterator<Item = (&Stencil, Mat3)> {
+        self.stencils[range.clone()].iter().zip(self.blocks[range].iter().copied())
     }
 
     /// Each reached vertex with the sum of its diagonal blocks from the springs' couplings,
