@@ -56,31 +56,48 @@ impl Aabb {
     }
 }
 
-/// A node: a leaf holds one primitive; an inner node its two children, the first right
-/// after it in [`Bvh::nodes`] (the build lays the tree out depth first) and the second
-/// further on, so a reverse sweep visits children before parents. 32 bytes: with both
-/// children and the primitive kept apart the nodes were 40, and the trees of self contact
-/// the largest arrays of the contact scenes (480 bytes a particle of sphere_64).
+/// A node: a leaf holds up to [`LEAF_SIZE`] primitives; an inner node its two children,
+/// the first right after it in [`Bvh::nodes`] (the build lays the tree out depth first)
+/// and the second further on, so a reverse sweep visits children before parents. 32
+/// bytes: with both children and the primitive kept apart the nodes were 40, and the
+/// trees of self contact the largest arrays of the contact scenes (480 bytes a particle
+/// of sphere_64).
 #[derive(Debug, Clone, Copy)]
 struct Node {
     aabb: Aabb,
-    /// The second child of an inner node, or [`LEAF`].
+    /// The second child of an inner node; of a leaf, [`LEAF`] with its first item's place
+    /// in [`Bvh::items`] and its number of items ([`Node::items`]).
     second: u32,
     /// The largest primitive index in the subtree, so that a query for primitives after
-    /// a given one (each pair of a tree with itself once) skips whole subtrees; a leaf's
-    /// own primitive.
+    /// a given one (each pair of a tree with itself once) skips whole subtrees.
     last: u32,
 }
 
 const _: () = assert!(std::mem::size_of::<Node>() == 32);
 
-/// [`Node::second`] of a leaf: no node has the root as a child.
-const LEAF: u32 = 0;
+/// The bit of [`Node::second`] that marks a leaf: no node has the root as a child, and
+/// no tree has 2³¹ nodes.
+const LEAF: u32 = 1 << 31;
+
+/// The most primitives a leaf holds. A tree of one primitive a leaf spent most of a
+/// cloth's pairs with itself on its lowest levels, where every pair of nodes meets:
+/// neighbouring edges of a mesh share a vertex, so their boxes always touch (on
+/// fold_64_adaptive half of the 108 000 leaf pairs a listing shared a vertex). A leaf of
+/// a few lists its own pairs and its pairs with another leaf directly.
+const LEAF_SIZE: usize = 4;
+
+/// Bits of a leaf's [`Node::second`] that hold its number of items.
+const COUNT_BITS: u32 = 3;
+
+const _: () = assert!(LEAF_SIZE < 1 << COUNT_BITS);
 
 impl Node {
-    /// The primitive of a leaf, `None` for an inner node.
-    fn primitive(&self) -> Option<u32> {
-        (self.second == LEAF).then_some(self.last)
+    /// The places in [`Bvh::items`] of a leaf's items, `None` for an inner node.
+    fn items(&self) -> Option<std::ops::Range<usize>> {
+        (self.second & LEAF != 0).then(|| {
+            let first = ((self.second & !LEAF) >> COUNT_BITS) as usize;
+            first..first + (self.second & ((1 << COUNT_BITS) - 1)) as usize
+        })
     }
 
     /// The children of inner node `index`.
@@ -89,14 +106,26 @@ impl Node {
     }
 }
 
+/// A primitive and its box, kept in its leaf's run of [`Bvh::items`].
+#[derive(Debug, Clone, Copy)]
+struct Item {
+    aabb: Aabb,
+    primitive: u32,
+}
+
 /// How much looser than at its last build a refitted tree may get, as the ratio of the
 /// summed surface areas of its inner boxes, before it is rebuilt.
 const REBUILD_RATIO: f32 = 2.0;
 
-/// An AABB tree with one primitive per leaf.
+/// An AABB tree with a few primitives per leaf.
 #[derive(Debug, Clone, Default)]
 pub struct Bvh {
     nodes: Vec<Node>,
+    /// The primitives and their boxes, each leaf's together, leaves in the order of the
+    /// nodes.
+    items: Vec<Item>,
+    /// Place in `items` of each primitive.
+    item_of: Vec<u32>,
     /// Node of each primitive's leaf.
     leaf_of: Vec<u32>,
     /// Summed inner surface area right after the last build.
@@ -120,12 +149,16 @@ impl Bvh {
     /// Builds the tree anew over `count` primitives, primitive `p` in box `boxes(p)`: each
     /// node splits its primitives at the median of their centres along the longest side
     /// of the centres' box (centres only, so coinciding primitives cannot make the split
-    /// loop).
+    /// loop), down to leaves of at most [`LEAF_SIZE`].
     pub fn rebuild(&mut self, count: usize, boxes: impl Fn(usize) -> Aabb) {
         self.nodes.clear();
+        self.items.clear();
+        self.item_of.clear();
+        self.item_of.resize(count, 0);
         self.leaf_of.clear();
         self.leaf_of.resize(count, 0);
-        self.nodes.reserve_exact((2 * count).saturating_sub(1));
+        self.nodes.reserve_exact((2 * count.div_ceil(2)).saturating_sub(1));
+        self.items.reserve_exact(count);
         let (mut order, mut centres) = (std::mem::take(&mut self.order), std::mem::take(&mut self.centres));
         order.clear();
         order.extend(0..count as u32);
@@ -142,25 +175,25 @@ impl Bvh {
     /// Adds the subtree over `primitives` and returns its node; boxes are filled in.
     fn split(&mut self, primitives: &mut [u32], centres: &[Vec3], boxes: &impl Fn(usize) -> Aabb) -> u32 {
         let index = self.nodes.len() as u32;
-        if let [primitive] = primitives {
-            self.nodes.push(Node { aabb: boxes(*primitive as usize), second: LEAF, last: *primitive });
-            self.leaf_of[*primitive as usize] = index;
+        if primitives.len() <= LEAF_SIZE {
+            // In the order a tree of one primitive a leaf had them, so that queries visit
+            // them as it did.
+            order_as_leaves(primitives, centres);
+            let first = self.items.len();
+            let mut node = Node { aabb: Aabb::EMPTY, second: LEAF | (first as u32) << COUNT_BITS, last: 0 };
+            node.second |= primitives.len() as u32;
+            for &primitive in primitives.iter() {
+                let aabb = boxes(primitive as usize);
+                self.item_of[primitive as usize] = self.items.len() as u32;
+                self.leaf_of[primitive as usize] = index;
+                self.items.push(Item { aabb, primitive });
+                (node.aabb, node.last) = (node.aabb.union(aabb), node.last.max(primitive));
+            }
+            self.nodes.push(node);
             return index;
         }
-        self.nodes.push(Node { aabb: Aabb::EMPTY, second: LEAF, last: 0 });
-        let spread = Aabb::around(primitives.iter().map(|&p| centres[p as usize]));
-        let extent = spread.max - spread.min;
-        let axis = if extent.x >= extent.y && extent.x >= extent.z {
-            0
-        } else if extent.y >= extent.z {
-            1
-        } else {
-            2
-        };
-        let middle = primitives.len() / 2;
-        primitives.select_nth_unstable_by(middle, |&a, &b| {
-            centres[a as usize][axis].total_cmp(&centres[b as usize][axis]).then(a.cmp(&b))
-        });
+        self.nodes.push(Node { aabb: Aabb::EMPTY, second: 0, last: 0 });
+        let middle = halve(primitives, centres);
         let (left, right) = primitives.split_at_mut(middle);
         self.split(left, centres, boxes);
         let second = self.split(right, centres, boxes);
@@ -169,10 +202,10 @@ impl Bvh {
         index
     }
 
-    /// Puts the primitives' new boxes `boxes(p)` into the leaves and recomputes every inner
-    /// box, children before parents; rebuilds instead when the tree has become
+    /// Puts the primitives' new boxes `boxes(p)` into the leaves and recomputes every
+    /// node's box, children before parents; rebuilds instead when the tree has become
     /// [`REBUILD_RATIO`] times looser than when it was built, or when the number of
-    /// primitives changed to `count`. Returns whether it rebuilt. The leaves are where the
+    /// primitives changed to `count`. Returns whether it rebuilt. The items are where the
     /// boxes are kept ([`Bvh::aabb`]): an array of them beside the tree held every box
     /// twice.
     pub fn refit(&mut self, count: usize, boxes: impl Fn(usize) -> Aabb + Sync) -> bool {
@@ -180,17 +213,18 @@ impl Bvh {
             self.rebuild(count, boxes);
             return true;
         }
-        self.nodes.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).for_each(|node| {
-            if let Some(primitive) = node.primitive() {
-                node.aabb = boxes(primitive as usize);
-            }
+        self.items.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).for_each(|item| {
+            item.aabb = boxes(item.primitive as usize);
         });
         for index in (0..self.nodes.len()).rev() {
             let node = self.nodes[index];
-            if node.primitive().is_none() {
-                let [a, b] = node.children(index as u32).map(|c| self.nodes[c as usize].aabb);
-                self.nodes[index].aabb = a.union(b);
-            }
+            self.nodes[index].aabb = match node.items() {
+                Some(items) => self.items[items].iter().fold(Aabb::EMPTY, |b, item| b.union(item.aabb)),
+                None => {
+                    let [a, b] = node.children(index as u32).map(|c| self.nodes[c as usize].aabb);
+                    a.union(b)
+                }
+            };
         }
         if self.inner_cost() > REBUILD_RATIO * self.built_cost.max(f32::MIN_POSITIVE) {
             self.rebuild(count, boxes);
@@ -199,24 +233,38 @@ impl Bvh {
         false
     }
 
-    /// Puts `aabb` into `primitive`'s leaf and grows every box above it to hold it, which
-    /// keeps queries exact for the leaves and costs the tree's depth, where a refit costs
-    /// every node (0.26 ms for sphere_64's two trees); the inner boxes only grow, until the
-    /// next refit.
+    /// Puts `aabb` into `primitive`'s item and grows every box above it to hold it, which
+    /// keeps queries exact for the items and costs the tree's depth, where a refit costs
+    /// every node (0.26 ms for sphere_64's two trees); the nodes' boxes only grow, until
+    /// the next refit.
     pub fn enlarge(&mut self, primitive: u32, aabb: Aabb) {
         let leaf = self.leaf_of[primitive as usize];
         let mut index = 0;
-        while index != leaf {
+        loop {
             let node = &mut self.nodes[index as usize];
             node.aabb = node.aabb.union(aabb);
+            if index == leaf {
+                break;
+            }
             // The first child's subtree runs from right after its parent to the second.
             index = if leaf < node.second { index + 1 } else { node.second };
         }
-        self.nodes[leaf as usize].aabb = aabb;
+        self.items[self.item_of[primitive as usize] as usize].aabb = aabb;
     }
 
+    /// The summed surface areas of the inner boxes of the tree of one primitive a leaf
+    /// that the build's splits make, added in its nodes' order (the same sum, to the bit,
+    /// whatever the leaves hold): a leaf's items stand for the inner nodes that were
+    /// above them.
     fn inner_cost(&self) -> f32 {
-        self.nodes.iter().filter(|n| n.primitive().is_none()).map(|n| n.aabb.surface_area()).sum()
+        let mut cost = 0.0;
+        for node in &self.nodes {
+            match node.items() {
+                Some(items) => add_inner_cost(&self.items[items], &mut cost),
+                None => cost += node.aabb.surface_area(),
+            }
+        }
+        cost
     }
 
     /// Calls `visit` with every primitive whose box overlaps `query`, top-down with
@@ -227,7 +275,8 @@ impl Bvh {
 
     /// Calls `visit` with every primitive numbered `first` or later whose box overlaps
     /// `query`, top-down, pruning subtrees whose boxes miss it or whose primitives all
-    /// come before `first`. A node's children are tested before they are pushed.
+    /// come before `first`. A node's children are tested before they are pushed; the
+    /// second is visited first, and a leaf's items last to first.
     pub fn query_from(&self, query: &Aabb, first: u32, mut visit: impl FnMut(u32)) {
         let wanted = |node: &Node| node.last >= first && node.aabb.overlaps(query);
         if self.nodes.first().is_none_or(|root| !wanted(root)) {
@@ -239,8 +288,12 @@ impl Bvh {
             depth -= 1;
             let index = stack[depth];
             let node = &self.nodes[index as usize];
-            if let Some(primitive) = node.primitive() {
-                visit(primitive);
+            if let Some(items) = node.items() {
+                for item in self.items[items].iter().rev() {
+                    if item.primitive >= first && item.aabb.overlaps(query) {
+                        visit(item.primitive);
+                    }
+                }
                 continue;
             }
             for child in node.children(index) {
@@ -252,9 +305,9 @@ impl Bvh {
         }
     }
 
-    /// The box of `primitive`, as the last build or refit gave it.
+    /// The box of `primitive`, as the last build, refit or enlargement gave it.
     pub fn aabb(&self, primitive: u32) -> Aabb {
-        self.nodes[self.leaf_of[primitive as usize] as usize].aabb
+        self.items[self.item_of[primitive as usize] as usize].aabb
     }
 
     /// Sets `roots` to the pairs of subtrees whose primitive pairs [`Bvh::overlaps_below`]
@@ -273,14 +326,26 @@ impl Bvh {
     /// `root` ([`Bvh::self_overlap_roots`]) whose boxes overlap, descending both subtrees
     /// together: a pair of nodes whose boxes miss prunes every pair below them, where a
     /// query per primitive walks from the root each time (on fold_64 and sphere_64, 12 000
-    /// edges a listing).
+    /// edges a listing). The pairs of a leaf, and of two leaves, are tested item by item.
     pub fn overlaps_below(&self, root: [u32; 2], mut visit: impl FnMut(u32, u32)) {
         self.pairs_below(root[0], root[1], u32::MAX, &mut |a, b| {
-            let [Some(p), Some(q)] = [a, b].map(|n| self.nodes[n as usize].primitive()) else {
+            let [Some(first), Some(second)] = [a, b].map(|n| self.nodes[n as usize].items()) else {
                 unreachable!("unlimited depth descends to leaves")
             };
-            if p != q {
-                visit(p.min(q), p.max(q));
+            let mut pair = |p: &Item, q: &Item| {
+                if p.aabb.overlaps(&q.aabb) {
+                    visit(p.primitive.min(q.primitive), p.primitive.max(q.primitive));
+                }
+            };
+            let (first, second) = (&self.items[first], &self.items[second]);
+            if a == b {
+                for (k, p) in first.iter().enumerate() {
+                    first[k + 1..].iter().for_each(|q| pair(p, q));
+                }
+            } else {
+                for p in first {
+                    second.iter().for_each(|q| pair(p, q));
+                }
             }
         });
     }
@@ -290,28 +355,27 @@ impl Bvh {
     /// leaves. Of two different inner nodes, the one with the larger box is split.
     fn pairs_below(&self, a: u32, b: u32, depth: u32, emit: &mut impl FnMut(u32, u32)) {
         let (node_a, node_b) = (&self.nodes[a as usize], &self.nodes[b as usize]);
+        let leaf = |node: &Node| node.second & LEAF != 0;
         if a == b {
-            match node_a.primitive() {
-                Some(_) => emit(a, a),
-                None if depth == 0 => emit(a, a),
-                None => {
-                    let [left, right] = node_a.children(a);
-                    self.pairs_below(left, left, depth - 1, emit);
-                    self.pairs_below(right, right, depth - 1, emit);
-                    self.pairs_below(left, right, depth - 1, emit);
-                }
+            if leaf(node_a) || depth == 0 {
+                emit(a, a);
+            } else {
+                let [left, right] = node_a.children(a);
+                self.pairs_below(left, left, depth - 1, emit);
+                self.pairs_below(right, right, depth - 1, emit);
+                self.pairs_below(left, right, depth - 1, emit);
             }
             return;
         }
         if !node_a.aabb.overlaps(&node_b.aabb) {
             return;
         }
-        let split_a = match (node_a.primitive(), node_b.primitive()) {
-            (Some(_), Some(_)) => return emit(a, b),
+        let split_a = match (leaf(node_a), leaf(node_b)) {
+            (true, true) => return emit(a, b),
             _ if depth == 0 => return emit(a, b),
-            (None, Some(_)) => true,
-            (Some(_), None) => false,
-            (None, None) => node_a.aabb.surface_area() >= node_b.aabb.surface_area(),
+            (false, true) => true,
+            (true, false) => false,
+            (false, false) => node_a.aabb.surface_area() >= node_b.aabb.surface_area(),
         };
         match split_a {
             true => node_a.children(a).map(|child| self.pairs_below(child, b, depth - 1, emit)),
@@ -332,6 +396,47 @@ impl Bvh {
     /// Whether the tree holds nothing.
     pub fn is_empty(&self) -> bool {
         self.leaf_of.is_empty()
+    }
+}
+
+/// Splits `primitives` at the median of their centres along the longest side of the
+/// centres' box, returning where the second half begins.
+fn halve(primitives: &mut [u32], centres: &[Vec3]) -> usize {
+    let spread = Aabb::around(primitives.iter().map(|&p| centres[p as usize]));
+    let extent = spread.max - spread.min;
+    let axis = if extent.x >= extent.y && extent.x >= extent.z {
+        0
+    } else if extent.y >= extent.z {
+        1
+    } else {
+        2
+    };
+    let middle = primitives.len() / 2;
+    primitives.select_nth_unstable_by(middle, |&a, &b| {
+        centres[a as usize][axis].total_cmp(&centres[b as usize][axis]).then(a.cmp(&b))
+    });
+    middle
+}
+
+/// Orders a leaf's `primitives` as a tree of one primitive a leaf would have laid them
+/// out, splitting each half again.
+fn order_as_leaves(primitives: &mut [u32], centres: &[Vec3]) {
+    if primitives.len() > 1 {
+        let middle = halve(primitives, centres);
+        let (left, right) = primitives.split_at_mut(middle);
+        order_as_leaves(left, centres);
+        order_as_leaves(right, centres);
+    }
+}
+
+/// Adds to `cost` the surface areas of the boxes of the inner nodes that a tree of one
+/// primitive a leaf had over `items` ([`order_as_leaves`]), in its nodes' order.
+fn add_inner_cost(items: &[Item], cost: &mut f32) {
+    if items.len() > 1 {
+        *cost += items.iter().fold(Aabb::EMPTY, |b, item| b.union(item.aabb)).surface_area();
+        let (left, right) = items.split_at(items.len() / 2);
+        add_inner_cost(left, cost);
+        add_inner_cost(right, cost);
     }
 }
 
@@ -445,6 +550,42 @@ mod tests {
             found.sort_unstable();
             assert_eq!(found, expected, "subtrees {depth} levels down");
         }
+    }
+
+    /// The summed inner areas of the tree of one primitive a leaf over `boxes`, its nodes
+    /// in depth-first order, as [`Bvh::refit`] measures looseness against.
+    fn single_leaf_cost(primitives: &mut [u32], centres: &[Vec3], boxes: &[Aabb], cost: &mut f32) {
+        if primitives.len() > 1 {
+            *cost += primitives.iter().fold(Aabb::EMPTY, |b, &p| b.union(boxes[p as usize])).surface_area();
+            let middle = halve(primitives, centres);
+            let (left, right) = primitives.split_at_mut(middle);
+            single_leaf_cost(left, centres, boxes, cost);
+            single_leaf_cost(right, centres, boxes, cost);
+        }
+    }
+
+    #[test]
+    fn leaves_of_several_primitives_keep_the_looseness_and_query_order_of_single_ones() {
+        let boxes = cloud(333, 0.0);
+        let moved = cloud(333, 0.01);
+        let mut tree = Bvh::build(&boxes);
+        assert!(tree.nodes.len() < boxes.len(), "{} nodes", tree.nodes.len());
+        let mut order: Vec<u32> = (0..boxes.len() as u32).collect();
+        let centres: Vec<Vec3> = boxes.iter().map(Aabb::centre).collect();
+        let mut expected = 0.0;
+        single_leaf_cost(&mut order, &centres, &boxes, &mut expected);
+        assert_eq!(tree.built_cost.to_bits(), expected.to_bits());
+        tree.refit(moved.len(), |p| moved[p]);
+        let mut order: Vec<u32> = (0..boxes.len() as u32).collect();
+        let mut refitted = 0.0;
+        single_leaf_cost(&mut order, &centres, &moved, &mut refitted);
+        assert_eq!(tree.inner_cost().to_bits(), refitted.to_bits());
+        // A query that meets every box visits the leaves of one primitive depth first,
+        // the second child first: the build's order reversed.
+        let mut visited = Vec::new();
+        tree.query(&cube(Vec3::splat(0.5), 10.0), |p| visited.push(p));
+        order.reverse();
+        assert_eq!(visited, order);
     }
 
     #[test]
