@@ -216,15 +216,18 @@ impl Bvh {
         self.items.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).for_each(|item| {
             item.aabb = boxes(item.primitive as usize);
         });
+        let items = &self.items;
+        self.nodes.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).for_each(|node| {
+            if let Some(range) = node.items() {
+                node.aabb = items[range].iter().fold(Aabb::EMPTY, |b, item| b.union(item.aabb));
+            }
+        });
         for index in (0..self.nodes.len()).rev() {
             let node = self.nodes[index];
-            self.nodes[index].aabb = match node.items() {
-                Some(items) => self.items[items].iter().fold(Aabb::EMPTY, |b, item| b.union(item.aabb)),
-                None => {
-                    let [a, b] = node.children(index as u32).map(|c| self.nodes[c as usize].aabb);
-                    a.union(b)
-                }
-            };
+            if node.second & LEAF == 0 {
+                let [a, b] = node.children(index as u32).map(|c| self.nodes[c as usize].aabb);
+                self.nodes[index].aabb = a.union(b);
+            }
         }
         if self.inner_cost() > REBUILD_RATIO * self.built_cost.max(f32::MIN_POSITIVE) {
             self.rebuild(count, boxes);
