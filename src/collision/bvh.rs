@@ -92,9 +92,14 @@ const COUNT_BITS: u32 = 3;
 const _: () = assert!(LEAF_SIZE < 1 << COUNT_BITS);
 
 impl Node {
+    /// Whether the node is a leaf ([`LEAF`]).
+    fn is_leaf(&self) -> bool {
+        self.second & LEAF != 0
+    }
+
     /// The places in [`Bvh::items`] of a leaf's items, `None` for an inner node.
     fn items(&self) -> Option<std::ops::Range<usize>> {
-        (self.second & LEAF != 0).then(|| {
+        self.is_leaf().then(|| {
             let first = ((self.second & !LEAF) >> COUNT_BITS) as usize;
             first..first + (self.second & ((1 << COUNT_BITS) - 1)) as usize
         })
@@ -180,16 +185,15 @@ impl Bvh {
             // them as it did.
             order_as_leaves(primitives, centres);
             let first = self.items.len();
-            let mut node = Node { aabb: Aabb::EMPTY, second: LEAF | (first as u32) << COUNT_BITS, last: 0 };
-            node.second |= primitives.len() as u32;
             for &primitive in primitives.iter() {
-                let aabb = boxes(primitive as usize);
                 self.item_of[primitive as usize] = self.items.len() as u32;
                 self.leaf_of[primitive as usize] = index;
-                self.items.push(Item { aabb, primitive });
-                (node.aabb, node.last) = (node.aabb.union(aabb), node.last.max(primitive));
+                self.items.push(Item { aabb: boxes(primitive as usize), primitive });
             }
-            self.nodes.push(node);
+            let items = &self.items[first..];
+            let second = LEAF | (first as u32) << COUNT_BITS | items.len() as u32;
+            let last = items.iter().map(|item| item.primitive).max().unwrap_or(0);
+            self.nodes.push(Node { aabb: items_box(items), second, last });
             return index;
         }
         self.nodes.push(Node { aabb: Aabb::EMPTY, second: 0, last: 0 });
@@ -219,12 +223,12 @@ impl Bvh {
         let items = &self.items;
         self.nodes.par_iter_mut().with_min_len(PARALLEL_MIN_LEN).for_each(|node| {
             if let Some(range) = node.items() {
-                node.aabb = items[range].iter().fold(Aabb::EMPTY, |b, item| b.union(item.aabb));
+                node.aabb = items_box(&items[range]);
             }
         });
         for index in (0..self.nodes.len()).rev() {
             let node = self.nodes[index];
-            if node.second & LEAF == 0 {
+            if !node.is_leaf() {
                 let [a, b] = node.children(index as u32).map(|c| self.nodes[c as usize].aabb);
                 self.nodes[index].aabb = a.union(b);
             }
@@ -358,9 +362,8 @@ impl Bvh {
     /// leaves. Of two different inner nodes, the one with the larger box is split.
     fn pairs_below(&self, a: u32, b: u32, depth: u32, emit: &mut impl FnMut(u32, u32)) {
         let (node_a, node_b) = (&self.nodes[a as usize], &self.nodes[b as usize]);
-        let leaf = |node: &Node| node.second & LEAF != 0;
         if a == b {
-            if leaf(node_a) || depth == 0 {
+            if node_a.is_leaf() || depth == 0 {
                 emit(a, a);
             } else {
                 let [left, right] = node_a.children(a);
@@ -373,7 +376,7 @@ impl Bvh {
         if !node_a.aabb.overlaps(&node_b.aabb) {
             return;
         }
-        let split_a = match (leaf(node_a), leaf(node_b)) {
+        let split_a = match (node_a.is_leaf(), node_b.is_leaf()) {
             (true, true) => return emit(a, b),
             _ if depth == 0 => return emit(a, b),
             (false, true) => true,
@@ -432,11 +435,16 @@ fn order_as_leaves(primitives: &mut [u32], centres: &[Vec3]) {
     }
 }
 
+/// The box around the `items`' boxes.
+fn items_box(items: &[Item]) -> Aabb {
+    items.iter().fold(Aabb::EMPTY, |b, item| b.union(item.aabb))
+}
+
 /// Adds to `cost` the surface areas of the boxes of the inner nodes that a tree of one
 /// primitive a leaf had over `items` ([`order_as_leaves`]), in its nodes' order.
 fn add_inner_cost(items: &[Item], cost: &mut f32) {
     if items.len() > 1 {
-        *cost += items.iter().fold(Aabb::EMPTY, |b, item| b.union(item.aabb)).surface_area();
+        *cost += items_box(items).surface_area();
         let (left, right) = items.split_at(items.len() / 2);
         add_inner_cost(left, cost);
         add_inner_cost(right, cost);

@@ -97,12 +97,7 @@ impl SpringCouplings {
         self.stencils.len()
     }
 
-    /// The acting springs' stencils and blocks, in the springs' order.
-    pub fn springs(&self) -> impl Iterator<Item = (&Stencil, Mat3)> {
-        self.springs_in(0..self.len())
-    }
-
-    /// The acting springs `range` of [`SpringCouplings::springs`].
+    /// The stencils and blocks of the acting springs `range`, in the springs' order.
     pub fn springs_in(&self, range: std::ops::Range<usize>) -> impl Iterator<Item = (&Stencil, Mat3)> {
         self.stencils[range.clone()].iter().zip(self.blocks[range].iter().copied())
     }
